@@ -1,0 +1,99 @@
+#include "common.hpp"
+
+#include <fmt/format.h>
+
+namespace limn::cli {
+
+MeshFormat parse_format_option(const std::string& value, const char* option) {
+  if (value.empty()) return MeshFormat::automatic;
+  const MeshFormat f = format_from_name(value);
+  if (f == MeshFormat::automatic)
+    throw InputError(fmt::format("{}: unknown format '{}' (obj, ply, off, glb)", option, value));
+  return f;
+}
+
+nlohmann::json stats_json(const MeshStats& s) {
+  using nlohmann::json;
+  json arity = json::object(), valence = json::object();
+  for (auto [k, n] : s.faces_by_arity) arity[std::to_string(k)] = n;
+  for (auto [k, n] : s.valence_histogram) valence[std::to_string(k)] = n;
+  json j = {
+      {"vertices", s.vertices},
+      {"referenced_vertices", s.referenced_vertices},
+      {"unreferenced_vertices", s.unreferenced_vertices},
+      {"faces", s.faces},
+      {"faces_by_arity", arity},
+      {"corners", s.corners},
+      {"edges", s.edges},
+      {"boundary_edges", s.boundary_edges},
+      {"boundary_loops", s.boundary_loops},
+      {"components", s.components},
+      {"euler_characteristic", s.euler_characteristic},
+      {"genus", s.genus >= 0 ? json(s.genus) : json(nullptr)},
+      {"closed", s.boundary_edges == 0},
+      {"manifold", s.non_manifold_edges == 0 && s.non_manifold_vertices == 0},
+      {"non_manifold_edges", s.non_manifold_edges},
+      {"non_manifold_vertices", s.non_manifold_vertices},
+      {"consistently_oriented", s.inconsistent_edges == 0},
+      {"inconsistent_edges", s.inconsistent_edges},
+      {"degenerate_faces", s.degenerate_faces},
+      {"extraordinary_vertices", s.extraordinary_vertices},
+      {"valence_histogram", valence},
+      {"crease_edges", s.crease_edges},
+      {"infinitely_sharp_crease_edges", s.infinitely_sharp_creases},
+      {"corner_vertices", s.corner_vertices},
+      {"hole_faces", s.hole_faces},
+      {"surface_area", s.surface_area},
+      {"has_normals", s.has_normals},
+      {"has_uvs", s.has_uvs},
+      {"has_colors", s.has_colors},
+  };
+  if (s.bbox.empty()) {
+    j["bbox"] = nullptr;
+  } else {
+    j["bbox"] = {{"min", {s.bbox.min[0], s.bbox.min[1], s.bbox.min[2]}},
+                 {"max", {s.bbox.max[0], s.bbox.max[1], s.bbox.max[2]}},
+                 {"diagonal", s.bbox.diagonal()}};
+  }
+  return j;
+}
+
+std::string stats_text(const MeshStats& s) {
+  std::string arity, valence;
+  for (auto [k, n] : s.faces_by_arity) arity += fmt::format(" {}-gons: {}", k, n);
+  for (auto [k, n] : s.valence_histogram) valence += fmt::format(" {}:{}", k, n);
+  std::string out;
+  out += fmt::format("vertices        {} ({} unreferenced)\n", s.vertices, s.unreferenced_vertices);
+  out +=
+      fmt::format("faces           {} ({})\n", s.faces, arity.empty() ? "none" : arity.substr(1));
+  out += fmt::format("edges           {} ({} boundary, {} non-manifold)\n", s.edges,
+                     s.boundary_edges, s.non_manifold_edges);
+  out += fmt::format("boundary loops  {}\n", s.boundary_loops);
+  out += fmt::format("components      {}\n", s.components);
+  out += fmt::format("euler char.     {}\n", s.euler_characteristic);
+  out += fmt::format("genus           {}\n",
+                     s.genus >= 0 ? std::to_string(s.genus) : std::string("n/a (non-manifold)"));
+  out += fmt::format("non-manifold    {} edges, {} vertices\n", s.non_manifold_edges,
+                     s.non_manifold_vertices);
+  out += fmt::format("orientation     {}\n",
+                     s.inconsistent_edges == 0
+                         ? std::string("consistent")
+                         : fmt::format("{} inconsistent edges", s.inconsistent_edges));
+  out += fmt::format("degenerate      {} zero-area faces\n", s.degenerate_faces);
+  out +=
+      fmt::format("extraordinary   {} vertices; valences{}\n", s.extraordinary_vertices, valence);
+  out +=
+      fmt::format("tags            {} crease edges ({} infinitely sharp), {} corners, {} holes\n",
+                  s.crease_edges, s.infinitely_sharp_creases, s.corner_vertices, s.hole_faces);
+  if (!s.bbox.empty())
+    out += fmt::format(
+        "bbox            [{:.6g} {:.6g} {:.6g}] - [{:.6g} {:.6g} {:.6g}] (diag {:.6g})\n",
+        s.bbox.min[0], s.bbox.min[1], s.bbox.min[2], s.bbox.max[0], s.bbox.max[1], s.bbox.max[2],
+        s.bbox.diagonal());
+  out += fmt::format("attributes      normals: {}, uvs: {}, colours: {}\n",
+                     s.has_normals ? "yes" : "no", s.has_uvs ? "yes" : "no",
+                     s.has_colors ? "yes" : "no");
+  return out;
+}
+
+}  // namespace limn::cli

@@ -1,0 +1,45 @@
+// Shared pieces of the limn CLI: command registration, timing, stats formatting.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "limn/mesh/io.hpp"
+#include "limn/mesh/topology.hpp"
+
+namespace limn::cli {
+
+void add_info(CLI::App& app);
+void add_convert(CLI::App& app);
+void add_shape(CLI::App& app);
+void add_demo(CLI::App& app);
+
+/// Milliseconds since construction.
+class Stopwatch {
+ public:
+  double ms() const {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0_)
+        .count();
+  }
+  /// Milliseconds since the last lap (or construction), and restarts the lap.
+  double lap() {
+    const auto now = std::chrono::steady_clock::now();
+    const double d = std::chrono::duration<double, std::milli>(now - lap_).count();
+    lap_ = now;
+    return d;
+  }
+
+ private:
+  std::chrono::steady_clock::time_point t0_ = std::chrono::steady_clock::now(), lap_ = t0_;
+};
+
+/// `--format` values accepted for input/output overrides.
+MeshFormat parse_format_option(const std::string& value, const char* option);
+
+nlohmann::json stats_json(const MeshStats& s);
+/// Human-readable multi-line summary of the stats.
+std::string stats_text(const MeshStats& s);
+
+}  // namespace limn::cli

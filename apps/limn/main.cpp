@@ -1,0 +1,37 @@
+// limn command-line tool: composes the library layers; no algorithm lives here.
+#include <fmt/format.h>
+
+#include <cstdio>
+
+#include "common.hpp"
+#include "limn/version.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"limn: adaptive subdivision, octree painting and shape approximation for surfaces",
+               "limn"};
+  app.set_version_flag("--version", std::string("limn ") + limn::version());
+  app.require_subcommand(1);
+  app.fallthrough(false);
+  limn::cli::add_info(app);
+  limn::cli::add_convert(app);
+  limn::cli::add_shape(app);
+  limn::cli::add_demo(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::Success& e) {
+    return app.exit(e);  // --help, --version
+  } catch (const CLI::ParseError& e) {
+    app.exit(e);
+    return 2;
+  } catch (const limn::InputError& e) {
+    std::fprintf(stderr, "limn: error: %s\n", e.what());
+    return 2;
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "limn: error: out of memory\n");
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "limn: error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

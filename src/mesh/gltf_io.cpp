@@ -1,0 +1,152 @@
+// Binary glTF 2.0 output through tinygltf, so results open in any glTF viewer.
+#include <fmt/format.h>
+#include <tiny_gltf.h>
+
+#include <cmath>
+#include <cstring>
+#include <sstream>
+
+#include "limn/mesh/io.hpp"
+
+namespace limn {
+
+namespace {
+
+constexpr uint32_t kNoVariant = 0xFFFFFFFFu;
+
+template <class T>
+int add_view(tinygltf::Model& model, std::vector<unsigned char>& bin, const std::vector<T>& data,
+             int target) {
+  while (bin.size() % 4) bin.push_back(0);  // glTF requires 4-byte aligned accessors
+  tinygltf::BufferView view;
+  view.buffer = 0;
+  view.byteOffset = bin.size();
+  view.byteLength = data.size() * sizeof(T);
+  view.target = target;
+  const auto* p = reinterpret_cast<const unsigned char*>(data.data());
+  bin.insert(bin.end(), p, p + view.byteLength);
+  model.bufferViews.push_back(view);
+  return static_cast<int>(model.bufferViews.size() - 1);
+}
+
+int add_accessor(tinygltf::Model& model, int view, int component, int type, size_t count) {
+  tinygltf::Accessor a;
+  a.bufferView = view;
+  a.componentType = component;
+  a.type = type;
+  a.count = count;
+  model.accessors.push_back(a);
+  return static_cast<int>(model.accessors.size() - 1);
+}
+
+}  // namespace
+
+void write_glb(const Mesh& m, std::string& out) {
+  if (m.face_count() == 0) throw InputError("cannot write glTF: the mesh has no faces");
+  const bool has_n = !m.normal_indices.empty(), has_uv = !m.uv_indices.empty();
+  const bool has_c = !m.colors.empty();
+  const std::vector<float> smooth = has_n ? std::vector<float>() : vertex_normals(m);
+
+  // Output vertices: one per distinct (vertex, normal, uv) corner combination. Each vertex keeps
+  // a short list of its variants, so this is linear without hashing.
+  std::vector<uint32_t> remap(m.corner_count());
+  std::vector<float> pos, nrm, uv, col;
+  {
+    struct Variant {
+      uint32_t n, t, out;
+    };
+    std::vector<std::vector<Variant>> variants(m.vertex_count());
+    for (size_t c = 0; c < m.corner_count(); ++c) {
+      const uint32_t v = m.face_vertices[c];
+      const uint32_t n = has_n ? m.normal_indices[c] : v, t = has_uv ? m.uv_indices[c] : 0;
+      uint32_t found = kNoVariant;
+      for (const Variant& x : variants[v])
+        if (x.n == n && x.t == t) found = x.out;
+      if (found == kNoVariant) {
+        found = static_cast<uint32_t>(pos.size() / 3);
+        variants[v].push_back({n, t, found});
+        pos.insert(pos.end(), &m.positions[3 * size_t(v)], &m.positions[3 * size_t(v)] + 3);
+        const float* src = has_n ? &m.normals[3 * size_t(n)] : &smooth[3 * size_t(v)];
+        nrm.insert(nrm.end(), src, src + 3);
+        if (has_uv) uv.insert(uv.end(), {m.uvs[2 * size_t(t)], 1.0f - m.uvs[2 * size_t(t) + 1]});
+        if (has_c) col.insert(col.end(), &m.colors[4 * size_t(v)], &m.colors[4 * size_t(v)] + 4);
+      }
+      remap[c] = found;
+    }
+  }
+  // glTF wants unit normals; zero ones (isolated or degenerate) get an arbitrary unit vector.
+  for (size_t i = 0; i < nrm.size(); i += 3) {
+    const float l = std::sqrt(nrm[i] * nrm[i] + nrm[i + 1] * nrm[i + 1] + nrm[i + 2] * nrm[i + 2]);
+    if (l > 0) {
+      for (int k = 0; k < 3; ++k) nrm[i + k] /= l;
+    } else {
+      nrm[i] = 0, nrm[i + 1] = 0, nrm[i + 2] = 1;
+    }
+  }
+  std::vector<uint32_t> tris;
+  tris.reserve(3 * (m.corner_count() - 2 * m.face_count()));
+  for (size_t f = 0; f < m.face_count(); ++f) {
+    const uint32_t o = m.face_offsets[f], n = m.face_size(f);
+    for (uint32_t i = 1; i + 1 < n; ++i)
+      tris.insert(tris.end(), {remap[o], remap[o + i], remap[o + i + 1]});
+  }
+
+  tinygltf::Model model;
+  model.asset.version = "2.0";
+  model.asset.generator = "limn";
+  std::vector<unsigned char> bin;
+  tinygltf::Primitive prim;
+  prim.mode = TINYGLTF_MODE_TRIANGLES;
+  const size_t nverts = pos.size() / 3;
+  prim.indices =
+      add_accessor(model, add_view(model, bin, tris, TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER),
+                   TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, TINYGLTF_TYPE_SCALAR, tris.size());
+  const int pa = add_accessor(model, add_view(model, bin, pos, TINYGLTF_TARGET_ARRAY_BUFFER),
+                              TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, nverts);
+  const Box box = bounding_box(m);
+  model.accessors[pa].minValues = {box.min[0], box.min[1], box.min[2]};
+  model.accessors[pa].maxValues = {box.max[0], box.max[1], box.max[2]};
+  prim.attributes["POSITION"] = pa;
+  prim.attributes["NORMAL"] =
+      add_accessor(model, add_view(model, bin, nrm, TINYGLTF_TARGET_ARRAY_BUFFER),
+                   TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, nverts);
+  if (has_uv)
+    prim.attributes["TEXCOORD_0"] =
+        add_accessor(model, add_view(model, bin, uv, TINYGLTF_TARGET_ARRAY_BUFFER),
+                     TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC2, nverts);
+  if (has_c)
+    prim.attributes["COLOR_0"] =
+        add_accessor(model, add_view(model, bin, col, TINYGLTF_TARGET_ARRAY_BUFFER),
+                     TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, nverts);
+
+  tinygltf::Material mat;
+  mat.name = "limn";
+  mat.pbrMetallicRoughness.metallicFactor = 0.0;
+  mat.pbrMetallicRoughness.roughnessFactor = 0.7;
+  mat.doubleSided = true;  // scans and cages are often open; show both sides
+  model.materials.push_back(mat);
+  prim.material = 0;
+
+  tinygltf::Buffer buffer;
+  buffer.data = std::move(bin);
+  model.buffers.push_back(std::move(buffer));
+  tinygltf::Mesh gm;
+  gm.name = "limn";
+  gm.primitives.push_back(prim);
+  model.meshes.push_back(gm);
+  tinygltf::Node node;
+  node.mesh = 0;
+  model.nodes.push_back(node);
+  tinygltf::Scene scene;
+  scene.nodes.push_back(0);
+  model.scenes.push_back(scene);
+  model.defaultScene = 0;
+
+  std::ostringstream os;
+  tinygltf::TinyGLTF writer;
+  if (!writer.WriteGltfSceneToStream(&model, os, /*prettyPrint=*/false, /*writeBinary=*/true))
+    throw std::runtime_error("tinygltf failed to serialise the glTF scene");
+  out += os.str();
+}
+
+}  // namespace limn

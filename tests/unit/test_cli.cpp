@@ -1,0 +1,228 @@
+// The limn executable as scripts see it: exit codes, one-line errors, no partial output files.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <tiny_gltf.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "limn/mesh/io.hpp"
+
+namespace limn {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+struct Result {
+  int code = -1;
+  std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("limn-cli-" + std::to_string(::getpid()) + "-" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  Result limn(const std::string& args) {
+    const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
+    const std::string cmd = std::string("'") + LIMN_CLI + "' " + args + " >'" + out.string() +
+                            "' 2>'" + err.string() + "' </dev/null";
+    const int status = std::system(cmd.c_str());
+    Result r;
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    r.out = slurp(out), r.err = slurp(err);
+    fs::remove(out), fs::remove(err);
+    return r;
+  }
+  // Files in the scratch folder (to catch leftovers of failed writes).
+  std::vector<std::string> files() const {
+    std::vector<std::string> v;
+    for (const auto& e : fs::directory_iterator(dir_)) v.push_back(e.path().filename().string());
+    std::sort(v.begin(), v.end());
+    return v;
+  }
+  std::string q(const fs::path& p) const { return "'" + p.string() + "'"; }
+
+  fs::path dir_;
+};
+
+const fs::path kData = LIMN_TEST_DATA;
+
+TEST_F(Cli, VersionAndHelp) {
+  Result r = limn("--version");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_THAT(r.out, HasSubstr("limn 0."));
+  EXPECT_EQ(limn("--help").code, 0);
+  for (const char* sub : {"info", "convert", "shape", "demo"}) {
+    r = limn(std::string(sub) + " --help");
+    EXPECT_EQ(r.code, 0) << sub;
+    EXPECT_THAT(r.out, HasSubstr("Usage")) << sub;
+  }
+}
+
+TEST_F(Cli, BadUsageExitsTwo) {
+  EXPECT_EQ(limn("").code, 2);
+  EXPECT_EQ(limn("frobnicate").code, 2);
+  EXPECT_EQ(limn("info").code, 2);
+  EXPECT_EQ(limn("info --no-such-flag x.obj").code, 2);
+  EXPECT_EQ(limn("convert only-one-arg.obj").code, 2);
+  EXPECT_EQ(limn("shape no-such-shape -o " + q(dir_ / "x.obj")).code, 2);
+}
+
+TEST_F(Cli, EveryBadFileExitsTwoWithOneLineNamingIt) {
+  size_t n = 0;
+  for (const auto& e : fs::directory_iterator(kData / "bad")) {
+    SCOPED_TRACE(e.path().string());
+    const Result r = limn("info " + q(e.path()));
+    EXPECT_EQ(r.code, 2);
+    EXPECT_THAT(r.err, HasSubstr(e.path().filename().string()));
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_TRUE(r.out.empty());
+    ++n;
+  }
+  EXPECT_GE(n, 12u);
+}
+
+TEST_F(Cli, FailedConvertLeavesNoFileAndKeepsTheOldOne) {
+  const fs::path out = dir_ / "out.obj";
+  for (const auto& e : fs::directory_iterator(kData / "bad")) {
+    SCOPED_TRACE(e.path().string());
+    EXPECT_EQ(limn("convert " + q(e.path()) + " " + q(out)).code, 2);
+    EXPECT_EQ(files(), std::vector<std::string>{});
+  }
+  { std::ofstream(out) << "precious"; }
+  EXPECT_EQ(limn("convert " + q(kData / "bad" / "bad_nan.obj") + " " + q(out)).code, 2);
+  EXPECT_EQ(slurp(out), "precious");
+  EXPECT_EQ(files(), std::vector<std::string>{"out.obj"});
+}
+
+TEST_F(Cli, DirectoryAndMissingPaths) {
+  Result r = limn("info " + q(dir_));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_THAT(r.err, HasSubstr("directory"));
+  r = limn("info " + q(dir_ / "does-not-exist.obj"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_THAT(r.err, HasSubstr("does-not-exist.obj"));
+  r = limn("info " + q(kData / "nonmanifold.obj" / "below-a-file.obj"));
+  EXPECT_EQ(r.code, 2);
+  // Writing into a folder that does not exist is an error, and nothing is created.
+  r = limn("convert " + q(kData / "nonmanifold.obj") + " " + q(dir_ / "no" / "such" / "x.ply"));
+  EXPECT_NE(r.code, 0);
+  EXPECT_FALSE(fs::exists(dir_ / "no"));
+}
+
+TEST_F(Cli, UnknownOutputExtensionIsBadUsage) {
+  const Result r = limn("convert " + q(kData / "nonmanifold.obj") + " " + q(dir_ / "x.stl"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(files(), std::vector<std::string>{});
+}
+
+TEST_F(Cli, NonManifoldIsReportedNotRejected) {
+  const Result r = limn("info --json " + q(kData / "nonmanifold.obj"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["non_manifold_edges"], 1);
+  EXPECT_EQ(j["non_manifold_vertices"], 2);  // the two ends of the shared edge (one also a bowtie)
+  EXPECT_EQ(j["manifold"], false);
+  EXPECT_TRUE(j["genus"].is_null());
+  EXPECT_EQ(j["faces"], 4);
+}
+
+TEST_F(Cli, BomAndMixedLineEndings) {
+  const Result r = limn("info --json " + q(kData / "bom_mixed_endings.obj"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["vertices"], 4);
+  EXPECT_EQ(j["faces_by_arity"]["4"], 1);
+  EXPECT_EQ(j["boundary_loops"], 1);
+}
+
+TEST_F(Cli, InfoTextAndJsonAgree) {
+  const fs::path cube = dir_ / "cube.obj";
+  ASSERT_EQ(limn("shape cube -o " + q(cube)).code, 0);
+  const Result text = limn("info " + q(cube));
+  ASSERT_EQ(text.code, 0);
+  EXPECT_THAT(text.out, HasSubstr("genus           0"));
+  const auto j = nlohmann::json::parse(limn("info --json " + q(cube)).out);
+  EXPECT_EQ(j["vertices"], 8);
+  EXPECT_EQ(j["edges"], 12);
+  EXPECT_EQ(j["extraordinary_vertices"], 8);
+  EXPECT_EQ(j["valence_histogram"]["3"], 8);
+  EXPECT_EQ(j["closed"], true);
+  EXPECT_TRUE(j.contains("timings_ms"));
+}
+
+TEST_F(Cli, ConvertChainKeepsTheMesh) {
+  const fs::path a = dir_ / "t.obj", b = dir_ / "t.ply", c = dir_ / "t.off", d = dir_ / "t2.obj";
+  ASSERT_EQ(limn("shape torus -o " + q(a)).code, 0);
+  ASSERT_EQ(limn("convert " + q(a) + " " + q(b)).code, 0);
+  ASSERT_EQ(limn("convert " + q(b) + " " + q(c)).code, 0);
+  ASSERT_EQ(limn("convert " + q(c) + " " + q(d)).code, 0);
+  const Mesh m0 = read_mesh(a), m3 = read_mesh(d);
+  EXPECT_EQ(m0.positions, m3.positions);
+  EXPECT_EQ(m0.face_offsets, m3.face_offsets);
+  EXPECT_EQ(m0.face_vertices, m3.face_vertices);
+  // --from/--to override extensions.
+  const fs::path odd = dir_ / "mesh.data";
+  ASSERT_EQ(limn("convert --to ply " + q(a) + " " + q(odd)).code, 0);
+  EXPECT_EQ(limn("info --format ply " + q(odd)).code, 0);
+}
+
+TEST_F(Cli, GlbOpensInAGltfLoader) {
+  const fs::path cage = dir_ / "cage.obj", glb = dir_ / "cage.glb";
+  ASSERT_EQ(limn("shape cage -o " + q(cage)).code, 0);
+  ASSERT_EQ(limn("convert " + q(cage) + " " + q(glb)).code, 0);
+  const Mesh m = read_mesh(cage);
+  size_t tris = 0;
+  for (size_t f = 0; f < m.face_count(); ++f) tris += m.face_size(f) - 2;
+
+  tinygltf::Model model;
+  tinygltf::TinyGLTF loader;
+  std::string err, warn;
+  ASSERT_TRUE(loader.LoadBinaryFromFile(&model, &err, &warn, glb.string())) << err;
+  ASSERT_EQ(model.meshes.size(), 1u);
+  const auto& prim = model.meshes[0].primitives[0];
+  EXPECT_EQ(prim.mode, TINYGLTF_MODE_TRIANGLES);
+  EXPECT_EQ(model.accessors[prim.indices].count, 3 * tris);
+  ASSERT_TRUE(prim.attributes.count("NORMAL"));
+  ASSERT_TRUE(prim.attributes.count("POSITION"));
+  const auto& pa = model.accessors[prim.attributes.at("POSITION")];
+  EXPECT_EQ(pa.count, m.vertex_count());  // no per-corner attributes: no splitting
+}
+
+TEST_F(Cli, ShapeListAndDemo) {
+  const Result l = limn("shape --list");
+  EXPECT_EQ(l.code, 0);
+  for (const char* n : {"cube", "torus", "cage", "terrain", "torus-dense"})
+    EXPECT_THAT(l.out, HasSubstr(n));
+  const Result d = limn("demo --quick -o " + q(dir_ / "demo"));
+  ASSERT_EQ(d.code, 0) << d.err;
+  const std::string md = slurp(dir_ / "demo" / "report.md");
+  EXPECT_THAT(md, HasSubstr("| torus |"));
+  const auto j = nlohmann::json::parse(slurp(dir_ / "demo" / "report.json"));
+  EXPECT_EQ(j["shapes"].size(), 5u);
+  EXPECT_TRUE(fs::exists(dir_ / "demo" / "cage.glb"));
+  // A file where the folder should be is bad usage.
+  { std::ofstream(dir_ / "afile") << "x"; }
+  EXPECT_EQ(limn("demo --quick -o " + q(dir_ / "afile")).code, 2);
+}
+
+}  // namespace
+}  // namespace limn
