@@ -3,6 +3,7 @@
 // the foundation issue asks for after Google Benchmark's table.
 //   limn_bench_io [--benchmark_repetitions=N ...]
 #include <benchmark/benchmark.h>
+#include <tbb/global_control.h>
 #include <fmt/format.h>
 #include <tiny_obj_loader.h>
 #include <unistd.h>
@@ -47,6 +48,12 @@ void limn_read(benchmark::State& state, const fs::path& path, bool adjacency) {
   state.SetBytesProcessed(int64_t(state.iterations()) * int64_t(fs::file_size(path)));
 }
 
+// The same with TBB held to one thread: what validation costs when no second core is free.
+void limn_read_serial(benchmark::State& state, const fs::path& path) {
+  tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+  limn_read(state, path, true);
+}
+
 void limn_topology(benchmark::State& state, const fs::path& path) {
   const limn::Mesh m = limn::read_mesh(path);
   for (auto _ : state) {
@@ -88,6 +95,8 @@ int main(int argc, char** argv) {
   reg("igea_obj/tinyobjloader_raw", [](benchmark::State& s) { tinyobj_raw(s, g_igea); });
   reg("igea_obj/limn_read", [](benchmark::State& s) { limn_read(s, g_igea, false); });
   reg("igea_obj/limn_read+adjacency", [](benchmark::State& s) { limn_read(s, g_igea, true); });
+  reg("igea_obj/limn_read+adjacency_1thread",
+      [](benchmark::State& s) { limn_read_serial(s, g_igea); });
   reg("igea_obj/limn_adjacency_only", [](benchmark::State& s) { limn_topology(s, g_igea); });
   reg("igea_ply_binary/limn_read", [](benchmark::State& s) { limn_read(s, g_igea_ply, false); });
   reg("terrain800k_obj/tinyobjloader_raw",
@@ -108,6 +117,7 @@ int main(int argc, char** argv) {
   fmt::print("\nRatios (goal: limn load incl. adjacency <= 1.5x tinyobjloader raw parse)\n");
   ratio("igea_obj/limn_read+adjacency", "igea_obj/tinyobjloader_raw");
   ratio("igea_obj/limn_read", "igea_obj/tinyobjloader_raw");
+  ratio("igea_obj/limn_read+adjacency_1thread", "igea_obj/tinyobjloader_raw");
   ratio("terrain800k_obj/limn_read+adjacency", "terrain800k_obj/tinyobjloader_raw");
   if (rep.ms.count("igea_ply_binary/limn_read"))
     fmt::print(
