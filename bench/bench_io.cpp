@@ -3,8 +3,8 @@
 // the foundation issue asks for after Google Benchmark's table.
 //   limn_bench_io [--benchmark_repetitions=N ...]
 #include <benchmark/benchmark.h>
-#include <tbb/global_control.h>
 #include <fmt/format.h>
+#include <tbb/global_control.h>
 #include <tiny_obj_loader.h>
 #include <unistd.h>
 

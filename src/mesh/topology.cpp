@@ -28,15 +28,20 @@ void parallel_range(size_t n, F&& body) {
 }  // namespace
 
 Topology build_topology(const Mesh& mesh) {
+  return build_topology(mesh.vertex_count(), mesh.face_offsets, mesh.face_vertices);
+}
+
+Topology build_topology(size_t nv, std::span<const uint32_t> face_offsets,
+                        std::span<const uint32_t> face_vertices) {
   Topology t;
-  const size_t nc = mesh.corner_count(), nv = mesh.vertex_count(), nf = mesh.face_count();
-  const uint32_t* fv = mesh.face_vertices.data();
+  const size_t nc = face_vertices.size(), nf = face_offsets.size() - 1;
+  const uint32_t* fv = face_vertices.data();
   t.corner_face.resize(nc);
   t.corner_next.resize(nc);
   t.corner_prev.resize(nc);
   parallel_range(nf, [&](size_t b, size_t e) {
     for (size_t f = b; f < e; ++f) {
-      const uint32_t o = mesh.face_offsets[f], n = mesh.face_offsets[f + 1] - o;
+      const uint32_t o = face_offsets[f], n = face_offsets[f + 1] - o;
       for (uint32_t i = 0; i < n; ++i) {
         t.corner_face[o + i] = static_cast<uint32_t>(f);
         t.corner_next[o + i] = o + (i + 1 == n ? 0 : i + 1);

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "limn/mesh/mesh.hpp"
@@ -34,6 +35,11 @@ struct Topology {
 /// Builds the corner table. Precondition: validate(mesh) passes. Time O(corners + sum of squared
 /// valences), memory ~36 bytes per corner. Multi-threaded with TBB for large meshes.
 Topology build_topology(const Mesh& mesh);
+
+/// The same from raw CSR faces over `vertex_count` vertices (for callers without positions,
+/// such as refinement levels). Same preconditions and cost.
+Topology build_topology(size_t vertex_count, std::span<const uint32_t> face_offsets,
+                        std::span<const uint32_t> face_vertices);
 
 /// Everything `limn info` reports about a mesh's structure.
 struct MeshStats {
