@@ -1,0 +1,73 @@
+// limn subdiv: Catmull-Clark refinement into per-level topology and stencil tables.
+//
+// Rules follow OpenSubdiv's Sdc exactly (OpenSubdiv 3.5 is the conformance oracle): faces of any
+// arity, boundaries (edge-only / edge-and-corner), infinitely sharp and semi-sharp creases with
+// the uniform or Chaikin decay, corner vertices, dart/crease/corner rules with the fractional
+// blend when sharpness decays below 1, and holes.
+//
+// Child vertices of a level are numbered like OpenSubdiv's Vtr does by default: first one point
+// per parent face, then one per parent edge, then one per parent vertex. So the provenance of
+// every point is implicit: child i < F is the face point of parent face i, F <= i < F + E the
+// edge point of parent edge i - F, and the rest vertex points of parent vertex i - F - E.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "limn/mesh/mesh.hpp"
+
+namespace limn {
+
+/// Scheme options (OpenSubdiv's Sdc::Options for Catmull-Clark).
+struct SubdivOptions {
+  BoundaryInterpolation boundary = BoundaryInterpolation::edge_and_corner;
+  CreaseMethod crease_method = CreaseMethod::uniform;
+  bool smooth_triangles = false;  ///< Sdc TRI_SUB_SMOOTH instead of TRI_SUB_CATMARK.
+};
+
+/// Options from a mesh's OpenSubdiv tags; unset tags take the defaults above.
+SubdivOptions subdiv_options(const Mesh& mesh);
+
+/// Per-point weights over the points of the previous level (CSR): point i is
+/// sum_k weights[k] * previous[indices[k]] for k in [offsets[i], offsets[i+1]).
+struct StencilTable {
+  std::vector<uint32_t> offsets{0};
+  std::vector<uint32_t> indices;
+  std::vector<float> weights;
+  size_t size() const { return offsets.size() - 1; }
+};
+
+/// Applies a stencil table to `channels` interleaved floats per point: out gets size() points.
+/// 1 <= channels <= 16. Sums in double. Data-parallel over points (TBB).
+/// O(total stencil entries * channels).
+void apply_stencils(const StencilTable& table, const float* in, float* out, int channels);
+
+/// The topology of one refinement level, as flat arrays.
+struct RefinedLevel {
+  std::vector<uint32_t> face_offsets{0};  ///< CSR faces (level 0 = the cage; later levels quads)
+  std::vector<uint32_t> face_vertices;
+  std::vector<uint32_t> edge_vertices;  ///< 2 per edge
+  std::vector<float> edge_sharpness;    ///< per edge, after decay; kInfiniteSharpness = sharp
+  std::vector<float> vertex_sharpness;  ///< per vertex, after decay
+  std::vector<uint8_t> face_hole;       ///< per face: 1 when the face is (inside) a hole
+  size_t vertex_count() const { return vertex_sharpness.size(); }
+  size_t face_count() const { return face_offsets.size() - 1; }
+  size_t edge_count() const { return edge_sharpness.size(); }
+};
+
+/// Uniform refinement to `depth` levels: levels[0] describes the cage, levels[k] (k >= 1) the
+/// k-th refinement, and stencils[k-1] computes level k's points from level k-1's.
+struct UniformRefinement {
+  SubdivOptions options;
+  std::vector<RefinedLevel> levels;
+  std::vector<StencilTable> stencils;
+  /// Positions (3 floats per point) of level `level`, by applying the stencils to the cage's.
+  std::vector<float> positions(const Mesh& cage, int level) const;
+};
+
+/// Refines `cage` uniformly `depth` times (0 <= depth <= 8). Throws InputError for cages limn
+/// cannot subdivide (see the note on non-manifold input in the implementation). Memory and time
+/// grow 4x per level.
+UniformRefinement refine_uniform(const Mesh& cage, int depth, const SubdivOptions& options);
+
+}  // namespace limn
