@@ -65,6 +65,23 @@ struct UniformRefinement {
   std::vector<float> positions(const Mesh& cage, int level) const;
 };
 
+/// Limit stencils over the points of one refinement level: position, and the two tangents whose
+/// cross product is the (outward, for counter-clockwise faces) normal. Smooth, dart, crease and
+/// corner masks as OpenSubdiv's Catmull-Clark limit masks (Far::PrimvarRefiner::Limit), using
+/// the rule of each vertex at that level.
+struct LimitStencils {
+  StencilTable position, tangent1, tangent2;
+};
+
+/// Builds limit stencils for level `level` (>= 1 unless the cage is all quads). O(points *
+/// valence). Throws InputError when the level has non-quad faces.
+LimitStencils limit_stencils(const UniformRefinement& r, int level);
+
+/// Unit normals (3 floats per point) from two tangent arrays; a zero normal where the tangents
+/// are parallel (degenerate geometry).
+std::vector<float> normals_from_tangents(const std::vector<float>& t1,
+                                         const std::vector<float>& t2);
+
 /// Refines `cage` uniformly `depth` times (0 <= depth <= 8). Throws InputError for cages limn
 /// cannot subdivide (see the note on non-manifold input in the implementation). Memory and time
 /// grow 4x per level.
