@@ -15,6 +15,7 @@ void add_info(CLI::App& app);
 void add_convert(CLI::App& app);
 void add_shape(CLI::App& app);
 void add_demo(CLI::App& app);
+void add_subdivide(CLI::App& app);
 
 /// Milliseconds since construction.
 class Stopwatch {

@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 #include <tiny_gltf.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -70,7 +71,7 @@ TEST_F(Cli, VersionAndHelp) {
   EXPECT_EQ(r.code, 0);
   EXPECT_THAT(r.out, HasSubstr("limn 0."));
   EXPECT_EQ(limn("--help").code, 0);
-  for (const char* sub : {"info", "convert", "shape", "demo"}) {
+  for (const char* sub : {"info", "convert", "shape", "subdivide", "demo"}) {
     r = limn(std::string(sub) + " --help");
     EXPECT_EQ(r.code, 0) << sub;
     EXPECT_THAT(r.out, HasSubstr("Usage")) << sub;
@@ -222,6 +223,33 @@ TEST_F(Cli, ShapeListAndDemo) {
   // A file where the folder should be is bad usage.
   { std::ofstream(dir_ / "afile") << "x"; }
   EXPECT_EQ(limn("demo --quick -o " + q(dir_ / "afile")).code, 2);
+}
+
+TEST_F(Cli, SubdivideUniformAndLimit) {
+  const fs::path cage = dir_ / "cage.obj", out = dir_ / "s.obj";
+  ASSERT_EQ(limn("shape cage -o " + q(cage)).code, 0);
+  const Mesh m = read_mesh(cage);
+  const Result r = limn("subdivide " + q(cage) + " -o " + q(out) + " --uniform 2 --limit --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  // Level 1 has one quad per cage corner, level 2 four times as many; hole faces are dropped.
+  EXPECT_EQ(j["levels"][1]["faces"], m.corner_count());
+  EXPECT_EQ(j["levels"][2]["faces"], 4 * m.corner_count());
+  const size_t hole_quads = 4 * m.face_size(m.hole_faces.at(0));
+  const Mesh s = read_mesh(out);
+  EXPECT_EQ(s.face_count(), 4 * m.corner_count() - hole_quads);
+  ASSERT_EQ(s.normal_indices.size(), s.corner_count());
+  for (size_t i = 0; i < s.normals.size(); i += 3) {
+    const float l = std::sqrt(s.normals[i] * s.normals[i] + s.normals[i + 1] * s.normals[i + 1] +
+                              s.normals[i + 2] * s.normals[i + 2]);
+    ASSERT_NEAR(l, 1.0f, 1e-4f) << "normal " << i / 3;
+  }
+  EXPECT_FALSE(s.crease_sharpness.empty());  // the infinitely sharp rim survives as tags
+  for (const char* bad : {"--uniform 9", "--uniform -1", ""}) {
+    const Result b = limn("subdivide " + q(cage) + " -o " + q(dir_ / "x.obj") + " " + bad);
+    EXPECT_EQ(b.code, 2) << bad;
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "x.obj"));
 }
 
 }  // namespace
