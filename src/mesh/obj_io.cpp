@@ -230,9 +230,13 @@ class ObjScanner {
     } else if (name == "hole") {
       mesh_.hole_faces.insert(mesh_.hole_faces.end(), ints_.begin(), ints_.end());
     } else if (name == "interpolateboundary") {
+      // RenderMan's convention, which OpenSubdiv's shapes follow: 1 sharpens edges and corners,
+      // 2 edges only.
       if (ints_.size() != 1 || ints_[0] > 2)
         fail("interpolateboundary tag needs one value 0, 1 or 2");
-      mesh_.tags.boundary = static_cast<BoundaryInterpolation>(ints_[0]);
+      mesh_.tags.boundary = ints_[0] == 0   ? BoundaryInterpolation::none
+                            : ints_[0] == 1 ? BoundaryInterpolation::edge_and_corner
+                                            : BoundaryInterpolation::edge_only;
     } else if (name == "facevaryinginterpolateboundary") {
       if (ints_.size() != 1 || ints_[0] > 5)
         fail("facevaryinginterpolateboundary needs one value 0-5");
@@ -461,7 +465,10 @@ void write_obj(const Mesh& m, std::string& out) {
     out += '\n';
   }
   if (m.tags.boundary != BoundaryInterpolation::unset)
-    out += fmt::format("t interpolateboundary 1/0/0 {}\n", int(m.tags.boundary));
+    out += fmt::format("t interpolateboundary 1/0/0 {}\n",
+                       m.tags.boundary == BoundaryInterpolation::none              ? 0
+                       : m.tags.boundary == BoundaryInterpolation::edge_and_corner ? 1
+                                                                                   : 2);
   if (m.tags.fvar_boundary >= 0)
     out += fmt::format("t facevaryinginterpolateboundary 1/0/0 {}\n", int(m.tags.fvar_boundary));
   if (m.tags.crease_method != CreaseMethod::unset)

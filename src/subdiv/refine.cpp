@@ -179,6 +179,37 @@ void init_cage_level(const Mesh& cage, const SubdivOptions& o, const Adjacency& 
           fmt::format("crease tag {} names vertices {} and {}, which share no edge", i, a, b));
     L.edge_sharpness[found] = std::min(cage.crease_sharpness[i], kInf);
   }
+  L.face_hole.assign(cage.face_count(), 0);
+  for (uint32_t f : cage.hole_faces) L.face_hole[f] = 1;
+  // The non-manifold test OpenSubdiv's tagging uses: faces around the vertex do not form a
+  // single fan (or a non-manifold edge touches it).
+  std::vector<uint8_t> vertex_nm(nv, 0);
+  for (uint32_t v = 0; v < nv; ++v) {
+    const uint32_t k0 = adj.vertex_edge_offsets[v], nedges = adj.vertex_edge_offsets[v + 1] - k0;
+    const uint32_t nfaces = t.vertex_face_count(v);
+    int nm_edges = 0, boundary = 0;
+    for (uint32_t k = k0; k < k0 + nedges; ++k) {
+      nm_edges += adj.edge_non_manifold[adj.vertex_edges[k]];
+      boundary += t.edge_faces[adj.vertex_edges[k]] == 1;
+    }
+    vertex_nm[v] = nm_edges > 0 || (nfaces != nedges && (nfaces + 1 != nedges || boundary != 2));
+  }
+  // Boundary interpolation "none": faces at a boundary vertex whose boundary edges are not all
+  // explicitly infinitely sharp are excluded, as holes (tested before boundaries are sharpened).
+  if (o.boundary == BoundaryInterpolation::none) {
+    for (uint32_t v = 0; v < nv; ++v) {
+      const uint32_t k0 = adj.vertex_edge_offsets[v], nedges = adj.vertex_edge_offsets[v + 1] - k0;
+      if (nedges == t.vertex_face_count(v) && !vertex_nm[v]) continue;
+      bool exclude = false;
+      for (uint32_t k = k0; k < k0 + nedges && !exclude; ++k) {
+        const uint32_t e = adj.vertex_edges[k];
+        exclude = t.edge_faces[e] == 1 && L.edge_sharpness[e] < kInf;
+      }
+      if (exclude)
+        for (uint32_t i = t.vertex_offsets[v]; i < t.vertex_offsets[v + 1]; ++i)
+          L.face_hole[t.corner_face[t.vertex_corners[i]]] = 1;
+    }
+  }
   for (size_t e = 0; e < ne; ++e)
     if (t.edge_faces[e] == 1 || adj.edge_non_manifold[e]) L.edge_sharpness[e] = kInf;
 
@@ -186,29 +217,21 @@ void init_cage_level(const Mesh& cage, const SubdivOptions& o, const Adjacency& 
   for (size_t i = 0; i < cage.corner_vertices.size(); ++i)
     L.vertex_sharpness[cage.corner_vertices[i]] = std::min(cage.corner_sharpness[i], kInf);
   for (uint32_t v = 0; v < nv; ++v) {
-    const uint32_t nedges = adj.vertex_edge_offsets[v + 1] - adj.vertex_edge_offsets[v];
+    const uint32_t k0 = adj.vertex_edge_offsets[v], nedges = adj.vertex_edge_offsets[v + 1] - k0;
     const uint32_t nfaces = t.vertex_face_count(v);
-    int nm_edges = 0;
-    bool nm = false;
-    for (uint32_t k = adj.vertex_edge_offsets[v]; k < adj.vertex_edge_offsets[v + 1]; ++k)
+    int nm_edges = 0, boundary = 0;
+    for (uint32_t k = k0; k < k0 + nedges; ++k) {
       nm_edges += adj.edge_non_manifold[adj.vertex_edges[k]];
-    // A manifold vertex has one fan of faces: nfaces == nedges (interior) or nedges - 1.
-    if (nm_edges > 0 || (nfaces != nedges && nfaces + 1 != nedges)) nm = true;
-    if (!nm && nfaces + 1 == nedges) {
-      // A boundary vertex might still join two fans (a bowtie): count its boundary edges.
-      int boundary = 0;
-      for (uint32_t k = adj.vertex_edge_offsets[v]; k < adj.vertex_edge_offsets[v + 1]; ++k)
-        boundary += t.edge_faces[adj.vertex_edges[k]] == 1;
-      nm = boundary != 2;
+      boundary += t.edge_faces[adj.vertex_edges[k]] == 1;
     }
     if (nfaces == 1 && nedges == 2) {
       if (o.boundary == BoundaryInterpolation::edge_and_corner) L.vertex_sharpness[v] = kInf;
-    } else if (nm && nm_edges != 2) {
-      L.vertex_sharpness[v] = kInf;
+    } else if (vertex_nm[v]) {
+      // Sharpened, except on an interior non-manifold crease: two opposing non-manifold edges
+      // with extra "fins" (more faces than edges) and no boundary.
+      if (!(nm_edges == 2 && boundary == 0 && nfaces > nedges)) L.vertex_sharpness[v] = kInf;
     }
   }
-  L.face_hole.assign(cage.face_count(), 0);
-  for (uint32_t f : cage.hole_faces) L.face_hole[f] = 1;
 }
 
 // Builds level k+1 and the stencils from level k.

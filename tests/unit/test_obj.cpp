@@ -73,7 +73,7 @@ TEST(Obj, OpenSubdivTags) {
                               "t crease 3/2/0 1 2 3 1.0 10\n"
                               "t corner 2/1/0 3 4 4.0\n"
                               "t hole 1/0/0 1\n"
-                              "t interpolateboundary 1/0/0 2\n"
+                              "t interpolateboundary 1/0/0 1\n"
                               "t creasemethod 0/0/1 chaikin\n"
                               "t facevaryinginterpolateboundary 1/0/0 1\n"
                               "t smoothtriangles 0/0/1 catmark\n",
@@ -83,7 +83,7 @@ TEST(Obj, OpenSubdivTags) {
   EXPECT_EQ(m.corner_vertices, (std::vector<uint32_t>{3, 4}));
   EXPECT_EQ(m.corner_sharpness, (std::vector<float>{4.0f, 4.0f}));
   EXPECT_EQ(m.hole_faces, (std::vector<uint32_t>{1}));
-  EXPECT_EQ(m.tags.boundary, BoundaryInterpolation::edge_and_corner);
+  EXPECT_EQ(m.tags.boundary, BoundaryInterpolation::edge_and_corner);  // RenderMan: 1
   EXPECT_EQ(m.tags.crease_method, CreaseMethod::chaikin);
   EXPECT_EQ(m.tags.fvar_boundary, 1);
   EXPECT_TRUE(m.tags.smooth_triangles);

@@ -1,0 +1,138 @@
+// OpenSubdiv 3.5 as the conformance oracle for limn's refinement: builds a Far::TopologyRefiner
+// from a limn::Mesh, refines it uniformly and interpolates the cage positions level by level.
+// Only the tests include this, so limn itself never depends on OpenSubdiv.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wshadow"
+#pragma GCC diagnostic ignored "-Wconversion"
+#pragma GCC diagnostic ignored "-Wsign-conversion"
+#pragma GCC diagnostic ignored "-Wunused-parameter"
+#pragma GCC diagnostic ignored "-Wpedantic"
+#include <opensubdiv/far/primvarRefiner.h>
+#include <opensubdiv/far/topologyDescriptor.h>
+#include <opensubdiv/far/topologyLevel.h>
+#include <opensubdiv/far/topologyRefiner.h>
+#include <opensubdiv/far/topologyRefinerFactory.h>
+#pragma GCC diagnostic pop
+
+#include "limn/mesh/mesh.hpp"
+#include "limn/subdiv/refine.hpp"
+
+namespace limn::test {
+
+namespace osd = OpenSubdiv::OPENSUBDIV_VERSION;
+
+/// The primvar type Far::PrimvarRefiner interpolates: it only needs Clear and AddWithWeight.
+struct OsdPoint {
+  double x = 0, y = 0, z = 0;  // double: the oracle should not add float round-off of its own
+  void Clear(void* = nullptr) { x = y = z = 0; }
+  void AddWithWeight(const OsdPoint& p, float w) {
+    x += w * p.x;
+    y += w * p.y;
+    z += w * p.z;
+  }
+};
+
+inline osd::Sdc::Options osd_options(const SubdivOptions& options) {
+  osd::Sdc::Options o;
+  switch (options.boundary) {
+    case BoundaryInterpolation::none:
+      o.SetVtxBoundaryInterpolation(osd::Sdc::Options::VTX_BOUNDARY_NONE);
+      break;
+    case BoundaryInterpolation::edge_only:
+      o.SetVtxBoundaryInterpolation(osd::Sdc::Options::VTX_BOUNDARY_EDGE_ONLY);
+      break;
+    case BoundaryInterpolation::edge_and_corner:
+    case BoundaryInterpolation::unset:  // limn's default, see SubdivOptions
+      o.SetVtxBoundaryInterpolation(osd::Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER);
+      break;
+  }
+  o.SetCreasingMethod(options.crease_method == CreaseMethod::chaikin
+                          ? osd::Sdc::Options::CREASE_CHAIKIN
+                          : osd::Sdc::Options::CREASE_UNIFORM);
+  o.SetTriangleSubdivision(options.smooth_triangles ? osd::Sdc::Options::TRI_SUB_SMOOTH
+                                                    : osd::Sdc::Options::TRI_SUB_CATMARK);
+  // Positions only: face-varying rules cannot change the vertex results.
+  o.SetFVarLinearInterpolation(osd::Sdc::Options::FVAR_LINEAR_ALL);
+  return o;
+}
+
+/// One OpenSubdiv level: positions (3 doubles per vertex, OpenSubdiv's vertex order) and the
+/// topology, which points into OsdRefinement::refiner.
+struct OsdLevel {
+  std::vector<double> positions;
+  const osd::Far::TopologyLevel* topology = nullptr;
+};
+
+struct OsdRefinement {
+  std::unique_ptr<osd::Far::TopologyRefiner> refiner;  // owns what levels[k].topology points to
+  std::vector<OsdLevel> levels;                        // levels[0] is the cage
+};
+
+/// Refines `cage` uniformly `depth` times with OpenSubdiv. Throws std::runtime_error when
+/// OpenSubdiv rejects the topology.
+inline OsdRefinement osd_refine(const Mesh& cage, int depth, const SubdivOptions& options) {
+  using Index = osd::Far::Index;
+  const size_t nf = cage.face_count();
+  std::vector<int> verts_per_face(nf);
+  for (size_t f = 0; f < nf; ++f) verts_per_face[f] = static_cast<int>(cage.face_size(f));
+  const std::vector<Index> face_verts(cage.face_vertices.begin(), cage.face_vertices.end());
+  const std::vector<Index> crease_verts(cage.crease_edges.begin(), cage.crease_edges.end());
+  const std::vector<Index> corner_verts(cage.corner_vertices.begin(), cage.corner_vertices.end());
+  const std::vector<Index> holes(cage.hole_faces.begin(), cage.hole_faces.end());
+
+  osd::Far::TopologyDescriptor desc;
+  desc.numVertices = static_cast<int>(cage.vertex_count());
+  desc.numFaces = static_cast<int>(nf);
+  desc.numVertsPerFace = verts_per_face.data();
+  desc.vertIndicesPerFace = face_verts.data();
+  desc.numCreases = static_cast<int>(cage.crease_sharpness.size());
+  desc.creaseVertexIndexPairs = crease_verts.data();
+  desc.creaseWeights = cage.crease_sharpness.data();
+  desc.numCorners = static_cast<int>(cage.corner_sharpness.size());
+  desc.cornerVertexIndices = corner_verts.data();
+  desc.cornerWeights = cage.corner_sharpness.data();
+  desc.numHoles = static_cast<int>(holes.size());
+  desc.holeIndices = holes.data();
+
+  using Factory = osd::Far::TopologyRefinerFactory<osd::Far::TopologyDescriptor>;
+  Factory::Options factory_options(osd::Sdc::SCHEME_CATMARK, osd_options(options));
+  OsdRefinement out;
+  out.refiner.reset(Factory::Create(desc, factory_options));
+  if (!out.refiner) throw std::runtime_error("OpenSubdiv rejected the cage topology");
+
+  osd::Far::TopologyRefiner::UniformOptions uniform(depth);
+  // Edges and sharpness of the last level are compared too, so keep its full topology.
+  uniform.fullTopologyInLastLevel = true;
+  out.refiner->RefineUniform(uniform);
+
+  std::vector<std::vector<OsdPoint>> points(static_cast<size_t>(depth) + 1);
+  points[0].resize(cage.vertex_count());
+  for (size_t v = 0; v < cage.vertex_count(); ++v)
+    points[0][v] = {cage.positions[3 * v], cage.positions[3 * v + 1], cage.positions[3 * v + 2]};
+  const osd::Far::PrimvarRefiner primvar(*out.refiner);
+  for (int k = 1; k <= depth; ++k) {
+    const auto n = static_cast<size_t>(out.refiner->GetLevel(k).GetNumVertices());
+    points[static_cast<size_t>(k)].resize(n);
+    primvar.Interpolate(k, points[static_cast<size_t>(k) - 1], points[static_cast<size_t>(k)]);
+  }
+
+  out.levels.resize(points.size());
+  for (size_t k = 0; k < points.size(); ++k) {
+    OsdLevel& level = out.levels[k];
+    level.topology = &out.refiner->GetLevel(static_cast<int>(k));
+    level.positions.reserve(3 * points[k].size());
+    for (const OsdPoint& p : points[k])
+      level.positions.insert(level.positions.end(), {p.x, p.y, p.z});
+  }
+  return out;
+}
+
+}  // namespace limn::test
