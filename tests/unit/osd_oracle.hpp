@@ -135,4 +135,25 @@ inline OsdRefinement osd_refine(const Mesh& cage, int depth, const SubdivOptions
   return out;
 }
 
+/// OpenSubdiv's limit positions and tangents (3 doubles per vertex each) at the last level, from
+/// Far::PrimvarRefiner::Limit.
+struct OsdLimit {
+  std::vector<double> position, tangent1, tangent2;
+};
+
+inline OsdLimit osd_limit(const OsdRefinement& r) {
+  const std::vector<double>& last = r.levels.back().positions;
+  const size_t n = last.size() / 3;
+  std::vector<OsdPoint> src(n), p(n), t1(n), t2(n);
+  for (size_t v = 0; v < n; ++v) src[v] = {last[3 * v], last[3 * v + 1], last[3 * v + 2]};
+  osd::Far::PrimvarRefiner(*r.refiner).Limit(src, p, t1, t2);
+  OsdLimit out;
+  for (size_t v = 0; v < n; ++v) {
+    out.position.insert(out.position.end(), {p[v].x, p[v].y, p[v].z});
+    out.tangent1.insert(out.tangent1.end(), {t1[v].x, t1[v].y, t1[v].z});
+    out.tangent2.insert(out.tangent2.end(), {t2[v].x, t2[v].y, t2[v].z});
+  }
+  return out;
+}
+
 }  // namespace limn::test

@@ -318,6 +318,9 @@ void check_positions(const Mesh& cage, const UniformRefinement& lr, const test::
 }
 
 // The whole comparison of limn and OpenSubdiv on one cage, levels 0..depth.
+void check_limit(const UniformRefinement& lr, const test::OsdRefinement& orf,
+                 const std::vector<LevelMap>& maps, const Mesh& cage);
+
 void expect_matches_osd(const Mesh& cage, int depth, const SubdivOptions& options) {
   SCOPED_TRACE(describe(options) + fmt::format(" depth={}", depth));
   const UniformRefinement lr = refine_uniform(cage, depth, options);
@@ -350,6 +353,81 @@ void expect_matches_osd(const Mesh& cage, int depth, const SubdivOptions& option
     check_sharpness(lr, orf, maps, k);
     ASSERT_NO_FATAL_FAILURE(check_positions(cage, lr, orf, maps, k));
   }
+  check_limit(lr, orf, maps, cage);
+}
+
+// Limit stencils: limn's position and tangent stencils are applied in double to OpenSubdiv's own
+// last-level points, so the masks are compared exactly, free of float round-off (at level 4 a
+// tangent is a difference of nearby points, and float positions alone move normals by ~1e-3).
+// Positions are compared everywhere; normals wherever the normal is unique: an interior crease
+// vertex has one normal per side, and which side OpenSubdiv returns follows its internal face
+// order, so there limn's normal must only be perpendicular to the crease, like OpenSubdiv's.
+// A smooth interior vertex of valence 2 gets corner tangents along its two edges, whose order (and
+// so the normal's sign) is a convention; it is skipped too.
+void check_limit(const UniformRefinement& lr, const test::OsdRefinement& orf,
+                 const std::vector<LevelMap>& maps, const Mesh& cage) {
+  const int depth = static_cast<int>(lr.levels.size()) - 1;
+  if (depth < 1) return;
+  const test::OsdLimit ol = test::osd_limit(orf);
+  const LimitStencils ls = limit_stencils(lr, depth);
+  const std::vector<double>& theirs = orf.levels.back().positions;
+  const std::vector<OsdIndex>& map = maps.back().vertex;
+  auto apply = [&](const StencilTable& t, size_t v, double out[3]) {
+    out[0] = out[1] = out[2] = 0.0;
+    for (uint32_t j = t.offsets[v]; j < t.offsets[v + 1]; ++j)
+      for (size_t c = 0; c < 3; ++c)
+        out[c] += double(t.weights[j]) * theirs[3 * size_t(map[t.indices[j]]) + c];
+  };
+  auto unit_cross = [](const double* a, const double* b, double n[3]) {
+    n[0] = a[1] * b[2] - a[2] * b[1];
+    n[1] = a[2] * b[0] - a[0] * b[2];
+    n[2] = a[0] * b[1] - a[1] * b[0];
+    const double l = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!(l > 0)) return false;
+    for (size_t c = 0; c < 3; ++c) n[c] /= l;
+    return true;
+  };
+  const osd::Far::TopologyLevel& T = *orf.levels.back().topology;
+  const double tolerance = 1e-6 * bounding_box(cage).diagonal();
+  Mismatches bad_pos(fmt::format("limit position (tolerance {:.3g})", tolerance));
+  Mismatches bad_normal("limit normal (tolerance 1e-5)");
+  size_t compared = 0, creases = 0;
+  for (size_t v = 0; v < lr.levels.back().vertex_count(); ++v) {
+    const size_t o = size_t(map[v]);
+    double p[3], t1[3], t2[3], n[3], on[3];
+    apply(ls.position, v, p);
+    double d = 0;
+    for (size_t c = 0; c < 3; ++c) d = std::max(d, std::fabs(p[c] - ol.position[3 * o + c]));
+    if (!(d <= tolerance)) bad_pos.add(d, fmt::format("vertex {}", v));
+    const OsdIndex oi = map[v];
+    if (T.IsVertexNonManifold(oi)) continue;  // no rotational order: tangents are a convention
+    if (!T.IsVertexBoundary(oi) && T.GetVertexFaces(oi).size() == 2) continue;
+    if (!unit_cross(&ol.tangent1[3 * o], &ol.tangent2[3 * o], on)) continue;  // degenerate
+    apply(ls.tangent1, v, t1);
+    apply(ls.tangent2, v, t2);
+    if (!unit_cross(t1, t2, n)) {
+      bad_normal.add(1.0, fmt::format("vertex {}: limn tangents are parallel", v));
+      continue;
+    }
+    int sharp_edges = 0;
+    for (const OsdIndex e : T.GetVertexEdges(oi)) sharp_edges += T.GetEdgeSharpness(e) > 0.0f;
+    if (!T.IsVertexBoundary(oi) && T.GetVertexSharpness(oi) <= 0.0f && sharp_edges == 2) {
+      ++creases;
+      // Both normals are perpendicular to the crease direction (OpenSubdiv's first tangent).
+      const double* a = &ol.tangent1[3 * o];
+      const double al = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+      const double dot = std::fabs(n[0] * a[0] + n[1] * a[1] + n[2] * a[2]) / al;
+      if (!(dot <= 1e-5)) bad_normal.add(dot, fmt::format("crease vertex {}", v));
+      continue;
+    }
+    ++compared;
+    double dn = 0;
+    for (size_t c = 0; c < 3; ++c) dn = std::max(dn, std::fabs(n[c] - on[c]));
+    if (!(dn <= 1e-5)) bad_normal.add(dn, fmt::format("vertex {}", v));
+  }
+  bad_pos.report(static_cast<size_t>(depth), lr.levels.back().vertex_count());
+  bad_normal.report(static_cast<size_t>(depth), compared + creases);
+  EXPECT_GT(compared, 0u) << "no limit normal was compared";
 }
 
 int depth_for(const Mesh& cage) {
