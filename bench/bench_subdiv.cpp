@@ -110,6 +110,35 @@ void limn_build(benchmark::State& state, const std::string& name) {
   }
 }
 
+// limn's build including the cage-flattened table, the like-for-like peer of OpenSubdiv's
+// StencilTableFactory output.
+void limn_build_flat(benchmark::State& state, const std::string& name) {
+  const limn::Mesh& m = g_meshes.at(name);
+  const int level = int(state.range(0));
+  const limn::SubdivOptions o = limn::subdiv_options(m);
+  for (auto _ : state) {
+    const limn::UniformRefinement r = limn::refine_uniform(m, level, o);
+    const limn::StencilTable flat = limn::cage_stencils(r, level);
+    benchmark::DoNotOptimize(flat.weights.data());
+  }
+}
+
+void limn_apply_flat(benchmark::State& state, const std::string& name, int threads) {
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
+  const limn::Mesh& m = g_meshes.at(name);
+  const int level = int(state.range(0));
+  const limn::UniformRefinement r = limn::refine_uniform(m, level, limn::subdiv_options(m));
+  const limn::StencilTable flat = limn::cage_stencils(r, level);
+  std::vector<float> dst(3 * flat.size());
+  for (auto _ : state) {
+    limn::apply_stencils(flat, m.positions.data(), dst.data(), 3);
+    benchmark::DoNotOptimize(dst.data());
+  }
+  state.SetBytesProcessed(
+      int64_t(state.iterations()) *
+      int64_t(flat.indices.size() * 8 + flat.offsets.size() * 4 + dst.size() * 4));
+}
+
 void osd_apply(benchmark::State& state, const std::string& name) {
   const limn::Mesh& m = g_meshes.at(name);
   auto r = osd_refine(m, int(state.range(0)));
@@ -183,6 +212,9 @@ int main(int argc, char** argv) {
     };
     reg("build/osd", [n](benchmark::State& s) { osd_build(s, n); });
     reg("build/limn", [n](benchmark::State& s) { limn_build(s, n); });
+    reg("build/limn_flat", [n](benchmark::State& s) { limn_build_flat(s, n); });
+    reg("apply/limn_flat_1t", [n](benchmark::State& s) { limn_apply_flat(s, n, 1); });
+    reg("apply/limn_flat_2t", [n](benchmark::State& s) { limn_apply_flat(s, n, 2); });
     reg("apply/osd_1t", [n](benchmark::State& s) { osd_apply(s, n); });
     reg("apply/limn_1t", [n](benchmark::State& s) { limn_apply(s, n, 1); });
     reg("apply/limn_2t", [n](benchmark::State& s) { limn_apply(s, n, 2); });
@@ -203,12 +235,18 @@ int main(int argc, char** argv) {
         return it == rec.ms.end() ? -1.0 : it->second;
       };
       const double ob = get("build/osd"), lb = get("build/limn"), oa = get("apply/osd_1t"),
-                   l1 = get("apply/limn_1t"), l2 = get("apply/limn_2t");
+                   l1 = get("apply/limn_1t"), l2 = get("apply/limn_2t"),
+                   lbf = get("build/limn_flat"), f1 = get("apply/limn_flat_1t"),
+                   f2 = get("apply/limn_flat_2t");
       if (ob < 0 || lb < 0) continue;
       fmt::print(
           "{:<12} L{}  build {:7.2f} / {:7.2f} ms = {:5.2f}x   apply 1t {:6.2f} / {:6.2f} ms "
           "= {:5.2f}x   2t {:5.2f}x\n",
           n, l, ob, lb, ob / lb, oa, l1, oa / l1, oa / l2);
+      fmt::print(
+          "{:<12} L{}  flat: build {:7.2f} ms = {:5.2f}x   apply 1t {:6.2f} ms = {:5.2f}x   "
+          "2t {:5.2f}x\n",
+          n, l, lbf, ob / lbf, f1, oa / f1, oa / f2);
     }
   if (rec.bps.count("stream_copy"))
     fmt::print("memory bandwidth (STREAM-style copy): {:.1f} GB/s\n", rec.bps["stream_copy"] / 1e9);

@@ -486,6 +486,49 @@ void apply_stencils(const StencilTable& table, const float* in, float* out, int 
   }
 }
 
+StencilTable compose_stencils(const StencilTable& outer, const StencilTable& inner) {
+  StencilTable out;
+  out.offsets.reserve(outer.size() + 1);
+  const size_t n = outer.size();
+  // Dense scratch over the source points, cleared through the touched list: merging without
+  // sorting keeps composition linear in the entries.
+  size_t sources = 0;
+  for (uint32_t i : inner.indices) sources = std::max(sources, size_t(i) + 1);
+  std::vector<double> acc(sources, 0.0);
+  std::vector<uint8_t> seen(sources, 0);
+  std::vector<uint32_t> touched;
+  for (size_t p = 0; p < n; ++p) {
+    touched.clear();
+    for (uint32_t j = outer.offsets[p]; j < outer.offsets[p + 1]; ++j) {
+      const uint32_t q = outer.indices[j];
+      const double w = outer.weights[j];
+      for (uint32_t k = inner.offsets[q]; k < inner.offsets[q + 1]; ++k) {
+        const uint32_t src = inner.indices[k];
+        if (!seen[src]) seen[src] = 1, touched.push_back(src);
+        acc[src] += w * double(inner.weights[k]);
+      }
+    }
+    std::sort(touched.begin(), touched.end());
+    for (uint32_t src : touched) {
+      const double w = acc[src];
+      acc[src] = 0.0, seen[src] = 0;
+      if (w == 0.0) continue;  // exact cancellation: nothing to read
+      out.indices.push_back(src);
+      out.weights.push_back(static_cast<float>(w));
+    }
+    out.offsets.push_back(static_cast<uint32_t>(out.indices.size()));
+  }
+  return out;
+}
+
+StencilTable cage_stencils(const UniformRefinement& r, int level) {
+  if (level < 1 || level > int(r.stencils.size()))
+    throw InputError(fmt::format("cage_stencils: level {} not refined", level));
+  StencilTable flat = r.stencils[0];
+  for (int k = 1; k < level; ++k) flat = compose_stencils(r.stencils[size_t(k)], flat);
+  return flat;
+}
+
 std::vector<float> UniformRefinement::positions(const Mesh& cage, int level) const {
   std::vector<float> cur = cage.positions, next;
   for (int k = 0; k < level; ++k) {

@@ -65,6 +65,16 @@ struct UniformRefinement {
   std::vector<float> positions(const Mesh& cage, int level) const;
 };
 
+/// Composes stencil tables: the result computes `outer`'s points directly from the points `inner`
+/// reads (outer after inner). Weights are merged per source point and computed in double.
+/// O(sum over outer entries of the inner stencil sizes).
+StencilTable compose_stencils(const StencilTable& outer, const StencilTable& inner);
+
+/// Stencils from the cage straight to level `level` (1 <= level <= depth): one pass turns an
+/// animated cage into that level's points, like OpenSubdiv's Far::StencilTableFactory without
+/// intermediate levels.
+StencilTable cage_stencils(const UniformRefinement& r, int level);
+
 /// Limit stencils over the points of one refinement level: position, and the two tangents whose
 /// cross product is the (outward, for counter-clockwise faces) normal. Smooth, dart, crease and
 /// corner masks as OpenSubdiv's Catmull-Clark limit masks (Far::PrimvarRefiner::Limit), using
