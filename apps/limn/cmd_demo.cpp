@@ -1,12 +1,13 @@
 // limn demo: the workflow on built-in shapes, no input files needed. Grows with each layer; today
-// it builds every procedural cage, analyses it as `limn info` does, exports viewable meshes and
-// writes a Markdown + JSON report.
+// it builds every procedural cage, analyses it as `limn info` does, subdivides the small cages to
+// their limit surface, exports viewable meshes and writes a Markdown + JSON report.
 #include <fmt/format.h>
 
 #include <filesystem>
 
 #include "common.hpp"
 #include "limn/mesh/shapes.hpp"
+#include "limn/subdiv/refine.hpp"
 #include "limn/version.hpp"
 
 namespace limn::cli {
@@ -93,6 +94,46 @@ void add_demo(CLI::App& app) {
       j["description"] = s.what;
       j["timings_ms"] = {{"build", t_build}, {"topology", t_topo}, {"analysis", t_analyze}};
       report["shapes"].push_back(j);
+    }
+    // Subdivision: the small cages, uniformly refined and pushed to the limit surface.
+    md +=
+        "\n## Subdivision surfaces\n\nUniform Catmull-Clark refinement with OpenSubdiv's rules "
+        "(creases, corners, boundaries, holes), points pushed to the limit with limit normals.\n\n"
+        "| cage | level | faces | refine ms | limit ms | output |\n|---|---:|---:|---:|---:|---|\n";
+    for (const char* name : {"cube", "torus", "cage"}) {
+      const int level = 3;
+      fmt::print(stderr, "subdivide {} to level {} ...", name, level);
+      std::fflush(stderr);
+      Stopwatch sw;
+      const Mesh cage = make_shape(name);
+      const UniformRefinement r = refine_uniform(cage, level, subdiv_options(cage));
+      const std::vector<float> pts = r.positions(cage, level);
+      const double t_refine = sw.lap();
+      const LimitStencils ls = limit_stencils(r, level);
+      Mesh surface;
+      surface.positions.resize(pts.size());
+      std::vector<float> t1(pts.size()), t2(pts.size());
+      apply_stencils(ls.position, pts.data(), surface.positions.data(), 3);
+      apply_stencils(ls.tangent1, pts.data(), t1.data(), 3);
+      apply_stencils(ls.tangent2, pts.data(), t2.data(), 3);
+      surface.normals = normals_from_tangents(t1, t2);
+      const double t_limit = sw.lap();
+      const RefinedLevel& L = r.levels.back();
+      for (size_t f = 0; f < L.face_count(); ++f)
+        if (!L.face_hole[f])
+          surface.add_face(
+              std::span<const uint32_t>(L.face_vertices.data() + L.face_offsets[f], 4));
+      surface.normal_indices = surface.face_vertices;
+      const std::string file = fmt::format("{}-limit-L{}.glb", name, level);
+      write_mesh(surface, dir / file);
+      fmt::print(stderr, " {} faces ({:.0f} ms)\n", surface.face_count(), sw.ms());
+      md += fmt::format("| {} | {} | {} | {:.1f} | {:.1f} | [{}]({}) |\n", name, level,
+                        surface.face_count(), t_refine, t_limit, file, file);
+      report["subdivision"].push_back({{"cage", name},
+                                       {"level", level},
+                                       {"faces", surface.face_count()},
+                                       {"output", file},
+                                       {"timings_ms", {{"refine", t_refine}, {"limit", t_limit}}}});
     }
     md += "\nShapes:\n\n";
     for (const auto& s : shapes) md += fmt::format("- `{}`: {}\n", s.name, s.what);

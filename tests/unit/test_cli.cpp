@@ -220,6 +220,10 @@ TEST_F(Cli, ShapeListAndDemo) {
   const auto j = nlohmann::json::parse(slurp(dir_ / "demo" / "report.json"));
   EXPECT_EQ(j["shapes"].size(), 5u);
   EXPECT_TRUE(fs::exists(dir_ / "demo" / "cage.glb"));
+  ASSERT_EQ(j["subdivision"].size(), 3u);
+  // The subdivided cage opens as a mesh of quads: 4^3 per cage corner, less the hole's.
+  EXPECT_TRUE(fs::exists(dir_ / "demo" / "cage-limit-L3.glb"));
+  EXPECT_EQ(j["subdivision"][0]["faces"], 6 * 4 * 16);  // cube: 24 quads at L1, x16 by L3
   // A file where the folder should be is bad usage.
   { std::ofstream(dir_ / "afile") << "x"; }
   EXPECT_EQ(limn("demo --quick -o " + q(dir_ / "afile")).code, 2);
