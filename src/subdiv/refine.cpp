@@ -183,15 +183,18 @@ void init_cage_level(const Mesh& cage, const SubdivOptions& o, const Adjacency& 
   for (uint32_t f : cage.hole_faces) L.face_hole[f] = 1;
   // The non-manifold test OpenSubdiv's tagging uses: faces around the vertex do not form a
   // single fan (or a non-manifold edge touches it).
-  std::vector<uint8_t> vertex_nm(nv, 0);
-  for (uint32_t v = 0; v < nv; ++v) {
-    const uint32_t k0 = adj.vertex_edge_offsets[v], nedges = adj.vertex_edge_offsets[v + 1] - k0;
-    const uint32_t nfaces = t.vertex_face_count(v);
-    int nm_edges = 0, boundary = 0;
-    for (uint32_t k = k0; k < k0 + nedges; ++k) {
+  auto count_edges = [&](uint32_t v, int& nm_edges, int& boundary) {
+    for (uint32_t k = adj.vertex_edge_offsets[v]; k < adj.vertex_edge_offsets[v + 1]; ++k) {
       nm_edges += adj.edge_non_manifold[adj.vertex_edges[k]];
       boundary += t.edge_faces[adj.vertex_edges[k]] == 1;
     }
+  };
+  std::vector<uint8_t> vertex_nm(nv, 0);
+  for (uint32_t v = 0; v < nv; ++v) {
+    const uint32_t nedges = adj.vertex_edge_offsets[v + 1] - adj.vertex_edge_offsets[v];
+    const uint32_t nfaces = t.vertex_face_count(v);
+    int nm_edges = 0, boundary = 0;
+    count_edges(v, nm_edges, boundary);
     vertex_nm[v] = nm_edges > 0 || (nfaces != nedges && (nfaces + 1 != nedges || boundary != 2));
   }
   // Boundary interpolation "none": faces at a boundary vertex whose boundary edges are not all
@@ -217,13 +220,10 @@ void init_cage_level(const Mesh& cage, const SubdivOptions& o, const Adjacency& 
   for (size_t i = 0; i < cage.corner_vertices.size(); ++i)
     L.vertex_sharpness[cage.corner_vertices[i]] = std::min(cage.corner_sharpness[i], kInf);
   for (uint32_t v = 0; v < nv; ++v) {
-    const uint32_t k0 = adj.vertex_edge_offsets[v], nedges = adj.vertex_edge_offsets[v + 1] - k0;
+    const uint32_t nedges = adj.vertex_edge_offsets[v + 1] - adj.vertex_edge_offsets[v];
     const uint32_t nfaces = t.vertex_face_count(v);
     int nm_edges = 0, boundary = 0;
-    for (uint32_t k = k0; k < k0 + nedges; ++k) {
-      nm_edges += adj.edge_non_manifold[adj.vertex_edges[k]];
-      boundary += t.edge_faces[adj.vertex_edges[k]] == 1;
-    }
+    count_edges(v, nm_edges, boundary);
     if (nfaces == 1 && nedges == 2) {
       if (o.boundary == BoundaryInterpolation::edge_and_corner) L.vertex_sharpness[v] = kInf;
     } else if (vertex_nm[v]) {
