@@ -39,11 +39,13 @@ struct Weighted {
 LimitStencils limit_stencils(const UniformRefinement& r, int level) {
   if (level < 0 || level >= int(r.levels.size()))
     throw InputError(fmt::format("limit: level {} not refined", level));
-  const RefinedLevel& L = r.levels[size_t(level)];
+  return limit_stencils(r.levels[size_t(level)]);
+}
+
+LimitStencils limit_stencils(const RefinedLevel& L) {
   for (size_t f = 0; f < L.face_count(); ++f)
     if (L.face_offsets[f + 1] - L.face_offsets[f] != 4)
-      throw InputError(
-          fmt::format("limit: level {} has non-quad faces; refine at least once", level));
+      throw InputError("limit: the level has non-quad faces; refine at least once");
   const size_t nv = L.vertex_count();
   const Topology t = build_topology(nv, L.face_offsets, L.face_vertices);
   const uint32_t* fv = L.face_vertices.data();

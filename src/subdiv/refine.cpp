@@ -19,6 +19,7 @@
 #include <cmath>
 #include <memory>
 #include <span>
+#include <stdexcept>
 
 #include "limn/mesh/topology.hpp"
 
@@ -234,12 +235,34 @@ void init_cage_level(const Mesh& cage, const SubdivOptions& o, const Adjacency& 
   }
 }
 
+// The parent components one refinement step gives children to, and where those children land.
+// Uniform refinement selects everything (`all`, no lists); sparse refinement lists them in
+// ascending order. Child vertices are numbered by blocks: face points of faces[], then edge
+// points of edges[], then vertex points of vertices[].
+struct Selection {
+  bool all = true;
+  uint32_t nf = 0, ne = 0, nv = 0;               // counts (also when all)
+  std::vector<uint32_t> faces, edges, vertices;  // when !all
+  std::vector<uint32_t> edge_slot, vertex_slot;  // parent edge/vertex -> index in edges/vertices
+  uint32_t face(uint32_t i) const { return all ? i : faces[i]; }
+  uint32_t edge(uint32_t i) const { return all ? i : edges[i]; }
+  uint32_t vertex(uint32_t i) const { return all ? i : vertices[i]; }
+  uint32_t eslot(uint32_t e) const { return all ? e : edge_slot[e]; }
+  uint32_t vslot(uint32_t v) const { return all ? v : vertex_slot[v]; }
+  static Selection everything(const RefinedLevel& P) {
+    Selection s;
+    s.nf = static_cast<uint32_t>(P.face_count());
+    s.ne = static_cast<uint32_t>(P.edge_count());
+    s.nv = static_cast<uint32_t>(P.vertex_count());
+    return s;
+  }
+};
+
 // Builds level k+1 and the stencils from level k.
 void refine_level(const SubdivOptions& o, const RefinedLevel& P, const Adjacency& adj,
-                  RefinedLevel& C, StencilTable& S) {
+                  const Selection& sel, RefinedLevel& C, StencilTable& S) {
   const Topology& t = adj.topo;
-  const size_t nf = P.face_count(), ne = t.edge_count(), nv = P.vertex_count();
-  const uint32_t F = static_cast<uint32_t>(nf), E = static_cast<uint32_t>(ne);
+  const uint32_t F = sel.nf, E = sel.ne, NV = sel.nv;
   auto face_verts = [&](uint32_t f) {
     return std::span<const uint32_t>(P.face_vertices.data() + P.face_offsets[f],
                                      P.face_offsets[f + 1] - P.face_offsets[f]);
@@ -251,18 +274,19 @@ void refine_level(const SubdivOptions& o, const RefinedLevel& P, const Adjacency
   };
 
   S = StencilTable{};
-  S.offsets.reserve(nf + ne + nv + 1);
+  S.offsets.reserve(size_t(F) + E + NV + 1);
   Accum acc, cmask;
 
   // Face points: centroids.
-  for (uint32_t f = 0; f < F; ++f) {
+  for (uint32_t i = 0; i < F; ++i) {
     acc.clear();
-    face_point(f, 1.0, acc);
+    face_point(sel.face(i), 1.0, acc);
     acc.emit(S);
   }
 
   // Edge points.
-  for (uint32_t e = 0; e < E; ++e) {
+  for (uint32_t ei = 0; ei < E; ++ei) {
+    const uint32_t e = sel.edge(ei);
     acc.clear();
     const uint32_t a = t.edge_vertices[2 * size_t(e)], b = t.edge_vertices[2 * size_t(e) + 1];
     const float s = P.edge_sharpness[e];
@@ -323,8 +347,9 @@ void refine_level(const SubdivOptions& o, const RefinedLevel& P, const Adjacency
 
   // Vertex points.
   std::vector<float> pe, ce;
-  C.vertex_sharpness.assign(size_t(F) + E + nv, 0.0f);
-  for (uint32_t v = 0; v < nv; ++v) {
+  C.vertex_sharpness.assign(size_t(F) + E + NV, 0.0f);
+  for (uint32_t vi = 0; vi < NV; ++vi) {
+    const uint32_t v = sel.vertex(vi);
     acc.clear();
     const uint32_t k0 = adj.vertex_edge_offsets[v], n = adj.vertex_edge_offsets[v + 1] - k0;
     const uint32_t s0 = t.vertex_offsets[v], nfaces = t.vertex_offsets[v + 1] - s0;
@@ -335,7 +360,7 @@ void refine_level(const SubdivOptions& o, const RefinedLevel& P, const Adjacency
       sharp_edges += sharp(pe[k]);
     }
     const float pv = P.vertex_sharpness[v], cv = decrement(pv);
-    C.vertex_sharpness[F + E + v] = cv;
+    C.vertex_sharpness[F + E + vi] = cv;
     const Rule prule = vertex_rule(pv, sharp_edges);
 
     auto smooth_mask = [&](Accum& m) {
@@ -396,15 +421,16 @@ void refine_level(const SubdivOptions& o, const RefinedLevel& P, const Adjacency
   // the outgoing edge, face point, edge point of the incoming edge), keeping orientation.
   C.face_offsets.assign(1, 0);
   C.face_vertices.clear();
-  C.face_vertices.reserve(4 * P.face_vertices.size());
   C.face_hole.clear();
-  for (uint32_t f = 0; f < F; ++f) {
+  for (uint32_t fi = 0; fi < F; ++fi) {
+    const uint32_t f = sel.face(fi);
     const uint32_t o0 = P.face_offsets[f], n = P.face_offsets[f + 1] - o0;
     for (uint32_t i = 0; i < n; ++i) {
       const uint32_t c = o0 + i;
-      C.face_vertices.insert(C.face_vertices.end(),
-                             {F + E + P.face_vertices[c], F + t.corner_edge[c], f,
-                              F + t.corner_edge[t.corner_prev[c]]});
+      C.face_vertices.insert(
+          C.face_vertices.end(),
+          {F + E + sel.vslot(P.face_vertices[c]), F + sel.eslot(t.corner_edge[c]), fi,
+           F + sel.eslot(t.corner_edge[t.corner_prev[c]])});
       C.face_offsets.push_back(static_cast<uint32_t>(C.face_vertices.size()));
       C.face_hole.push_back(P.face_hole[f]);
     }
@@ -414,9 +440,8 @@ void refine_level(const SubdivOptions& o, const RefinedLevel& P, const Adjacency
 // Child edge sharpness, once the child's edges are known: only the halves of parent edges
 // (edge point - vertex point) can be sharp.
 void child_edges(const SubdivOptions& o, const RefinedLevel& P, const Adjacency& padj,
-                 const Adjacency& cadj, RefinedLevel& C) {
-  const uint32_t F = static_cast<uint32_t>(P.face_count()),
-                 E = static_cast<uint32_t>(P.edge_count());
+                 const Selection& sel, const Adjacency& cadj, RefinedLevel& C) {
+  const uint32_t F = sel.nf, E = sel.ne;
   const size_t ne = cadj.topo.edge_count();
   C.edge_vertices = cadj.topo.edge_vertices;
   C.edge_sharpness.assign(ne, 0.0f);
@@ -424,7 +449,7 @@ void child_edges(const SubdivOptions& o, const RefinedLevel& P, const Adjacency&
   for (size_t e = 0; e < ne; ++e) {
     const uint32_t a = C.edge_vertices[2 * e], b = C.edge_vertices[2 * e + 1];  // a < b
     if (a < F + E && a >= F && b >= F + E) {
-      const uint32_t pedge = a - F, pvert = b - F - E;
+      const uint32_t pedge = sel.edge(a - F), pvert = sel.vertex(b - F - E);
       const float s = P.edge_sharpness[pedge];
       if (!sharp(s)) continue;
       if (o.crease_method != CreaseMethod::chaikin) {
@@ -539,6 +564,152 @@ std::vector<float> UniformRefinement::positions(const Mesh& cage, int level) con
   return cur;
 }
 
+std::vector<float> SparseRefinement::positions(const Mesh& cage, int level) const {
+  if (level < 0 || level >= int(levels.size()))
+    throw InputError(fmt::format("sparse refinement: level {} not refined", level));
+  std::vector<float> cur = cage.positions, next;
+  for (int k = 0; k < level; ++k) {
+    next.resize(3 * stencils[size_t(k)].size());
+    apply_stencils(stencils[size_t(k)], cur.data(), next.data(), 3);
+    cur.swap(next);
+  }
+  return cur;
+}
+
+SparseRefinement refine_sparse(const Mesh& cage, std::span<const uint8_t> vertex_depth,
+                               std::span<const uint8_t> face_depth, const SubdivOptions& options) {
+  constexpr int kMaxSparseDepth = 16;
+  validate(cage, "cage");
+  const size_t nv0 = cage.vertex_count(), nf0 = cage.face_count();
+  if (!vertex_depth.empty() && vertex_depth.size() != nv0)
+    throw InputError(fmt::format("sparse refinement: {} vertex depths for {} vertices",
+                                 vertex_depth.size(), nv0));
+  if (!face_depth.empty() && face_depth.size() != nf0)
+    throw InputError(
+        fmt::format("sparse refinement: {} face depths for {} faces", face_depth.size(), nf0));
+  for (std::span<const uint8_t> d : {vertex_depth, face_depth})
+    for (size_t i = 0; i < d.size(); ++i)
+      if (d[i] > kMaxSparseDepth)
+        throw InputError(
+            fmt::format("sparse refinement: depth {} of element {} out of range (0-{})", d[i], i,
+                        kMaxSparseDepth));
+
+  SparseRefinement r;
+  r.options = options;
+  r.levels.reserve(kMaxSparseDepth + 1);
+  {
+    SparseLevel& L0 = r.levels.emplace_back();
+    L0.level.face_offsets = cage.face_offsets;
+    L0.level.face_vertices = cage.face_vertices;
+    L0.vertex_complete.assign(nv0, 1);
+    L0.vertex_depth.assign(nv0, 0);
+    L0.face_depth.assign(nf0, 0);
+    std::copy(vertex_depth.begin(), vertex_depth.end(), L0.vertex_depth.begin());
+    std::copy(face_depth.begin(), face_depth.end(), L0.face_depth.begin());
+  }
+  auto adj = std::make_unique<Adjacency>(nv0, r.levels[0].level);
+  init_cage_level(cage, options, *adj, r.levels[0].level);
+
+  for (size_t k = 0;; ++k) {
+    SparseLevel& P = r.levels[k];
+    const RefinedLevel& PL = P.level;
+    const Topology& t = adj->topo;
+    const uint32_t nf = static_cast<uint32_t>(PL.face_count()),
+                   nv = static_cast<uint32_t>(PL.vertex_count()),
+                   ne = static_cast<uint32_t>(PL.edge_count());
+    // Requested faces, and the vertices they touch: every face around those is refined too, so
+    // that each requested face's child points see whole rings.
+    std::vector<uint8_t> near(nv, 0);
+    bool any = false;
+    for (uint32_t f = 0; f < nf; ++f) {
+      const uint32_t b = PL.face_offsets[f], e = PL.face_offsets[f + 1];
+      bool requested = P.face_depth[f] > 0;
+      for (uint32_t c = b; c < e && !requested; ++c)
+        requested = P.vertex_depth[PL.face_vertices[c]] > 0;
+      if (!requested) continue;
+      any = true;
+      for (uint32_t c = b; c < e; ++c) near[PL.face_vertices[c]] = 1;
+    }
+    P.face_refined.assign(nf, 0);
+    if (!any) break;
+    if (k == kMaxSparseDepth)
+      throw std::logic_error("sparse refinement: depth requests outlived the depth bound");
+    for (uint32_t v = 0; v < nv; ++v)
+      if (near[v])
+        for (uint32_t i = t.vertex_offsets[v]; i < t.vertex_offsets[v + 1]; ++i)
+          P.face_refined[t.corner_face[t.vertex_corners[i]]] = 1;
+
+    Selection sel;
+    sel.all = false;
+    sel.edge_slot.assign(ne, kNone);
+    sel.vertex_slot.assign(nv, kNone);
+    for (uint32_t f = 0; f < nf; ++f) {
+      if (!P.face_refined[f]) continue;
+      sel.faces.push_back(f);
+      for (uint32_t c = PL.face_offsets[f]; c < PL.face_offsets[f + 1]; ++c) {
+        const uint32_t v = PL.face_vertices[c];
+        // The selection rule guarantees this (see the header); a failure is a bug in limn.
+        if (!P.vertex_complete[v])
+          throw std::logic_error(fmt::format(
+              "sparse refinement: level {} vertex {} is refined without its whole ring", k, v));
+        sel.vertex_slot[v] = 0;
+        sel.edge_slot[t.corner_edge[c]] = 0;
+      }
+    }
+    for (uint32_t e = 0; e < ne; ++e)
+      if (sel.edge_slot[e] == 0)
+        sel.edge_slot[e] = uint32_t(sel.edges.size()), sel.edges.push_back(e);
+    for (uint32_t v = 0; v < nv; ++v)
+      if (sel.vertex_slot[v] == 0)
+        sel.vertex_slot[v] = uint32_t(sel.vertices.size()), sel.vertices.push_back(v);
+    sel.nf = uint32_t(sel.faces.size());
+    sel.ne = uint32_t(sel.edges.size());
+    sel.nv = uint32_t(sel.vertices.size());
+
+    SparseLevel C;
+    StencilTable& S = r.stencils.emplace_back();
+    refine_level(options, PL, *adj, sel, C.level, S);
+    auto cadj = std::make_unique<Adjacency>(C.level.vertex_sharpness.size(), C.level);
+    child_edges(options, PL, *adj, sel, *cadj, C.level);
+
+    // Provenance, completeness and the depths left.
+    const size_t nvc = size_t(sel.nf) + sel.ne + sel.nv;
+    C.vertex_complete.assign(nvc, 1);  // face points: the face's children are all present
+    C.vertex_depth.assign(nvc, 0);
+    for (uint32_t i = 0; i < sel.ne; ++i) {
+      const uint32_t e = sel.edges[i];
+      const uint32_t a = PL.edge_vertices[2 * size_t(e)], b = PL.edge_vertices[2 * size_t(e) + 1];
+      // A complete end vertex has every face of the edge; each must be refined.
+      bool whole = P.vertex_complete[a] || P.vertex_complete[b];
+      for (uint32_t j = adj->edge_face_offsets[e]; j < adj->edge_face_offsets[e + 1] && whole; ++j)
+        whole = P.face_refined[adj->edge_faces[j]];
+      C.vertex_complete[sel.nf + i] = whole;
+    }
+    for (uint32_t i = 0; i < sel.nv; ++i) {
+      const uint32_t v = sel.vertices[i];
+      bool whole = P.vertex_complete[v];
+      for (uint32_t j = t.vertex_offsets[v]; j < t.vertex_offsets[v + 1] && whole; ++j)
+        whole = P.face_refined[t.corner_face[t.vertex_corners[j]]];
+      const size_t cv = size_t(sel.nf) + sel.ne + i;
+      C.vertex_complete[cv] = whole;
+      C.vertex_depth[cv] = P.vertex_depth[v] > 0 ? uint8_t(P.vertex_depth[v] - 1) : 0;
+    }
+    for (uint32_t f : sel.faces) {
+      const uint32_t n = PL.face_offsets[f + 1] - PL.face_offsets[f];
+      for (uint32_t i = 0; i < n; ++i) {
+        C.face_parent.push_back(f);
+        C.face_depth.push_back(P.face_depth[f] > 0 ? uint8_t(P.face_depth[f] - 1) : 0);
+      }
+    }
+    C.parent_faces = std::move(sel.faces);
+    C.parent_edges = std::move(sel.edges);
+    C.parent_vertices = std::move(sel.vertices);
+    r.levels.push_back(std::move(C));
+    adj = std::move(cadj);
+  }
+  return r;
+}
+
 UniformRefinement refine_uniform(const Mesh& cage, int depth, const SubdivOptions& options) {
   if (depth < 0 || depth > 8)
     throw InputError(fmt::format("refinement depth {} out of range (0-8)", depth));
@@ -555,9 +726,10 @@ UniformRefinement refine_uniform(const Mesh& cage, int depth, const SubdivOption
   for (int k = 0; k < depth; ++k) {
     RefinedLevel& P = r.levels[size_t(k)];
     RefinedLevel& C = r.levels[size_t(k) + 1];
-    refine_level(options, P, *adj, C, r.stencils[size_t(k)]);
+    const Selection all = Selection::everything(P);
+    refine_level(options, P, *adj, all, C, r.stencils[size_t(k)]);
     auto cadj = std::make_unique<Adjacency>(C.vertex_sharpness.size(), C);
-    child_edges(options, P, *adj, *cadj, C);
+    child_edges(options, P, *adj, all, *cadj, C);
     adj = std::move(cadj);
   }
   return r;

@@ -12,6 +12,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "limn/mesh/mesh.hpp"
@@ -87,10 +88,58 @@ struct LimitStencils {
 /// valence). Throws InputError when the level has non-quad faces.
 LimitStencils limit_stencils(const UniformRefinement& r, int level);
 
+/// The same for any refined level of quads, uniform or sparse. On a sparse level only the
+/// stencils of complete vertices (SparseLevel::vertex_complete) are the limit's; the others see
+/// a cut-off ring and are meaningless.
+LimitStencils limit_stencils(const RefinedLevel& level);
+
 /// Unit normals (3 floats per point) from two tangent arrays; a zero normal where the tangents
 /// are parallel (degenerate geometry).
 std::vector<float> normals_from_tangents(const std::vector<float>& t1,
                                          const std::vector<float>& t2);
+
+/// One level of a sparse refinement: the part of the uniformly refined level k that the
+/// requested depths need, with local numbering. Vertices are numbered in blocks like a uniform
+/// level's, so provenance is implicit: local vertex i is the face point of previous-level face
+/// parent_faces[i] for i < parent_faces.size(), then the edge points of parent_edges[], then the
+/// vertex points of parent_vertices[] (all empty at level 0, which is the whole cage).
+struct SparseLevel {
+  RefinedLevel level;
+  std::vector<uint32_t> parent_faces, parent_edges, parent_vertices;
+  std::vector<uint32_t> face_parent;     ///< per face: the previous-level face it comes from
+  std::vector<uint8_t> vertex_complete;  ///< 1 when every face of the uniform level around the
+                                         ///< vertex is present (its ring is whole)
+  std::vector<uint8_t> vertex_depth;     ///< per vertex: levels still to refine around it
+  std::vector<uint8_t> face_depth;       ///< per face: levels still to refine inside it
+  std::vector<uint8_t> face_refined;     ///< per face: 1 when the next level refines it
+};
+
+/// Sparse (feature-adaptive) refinement: levels[0] is the cage, stencils[k-1] computes level k's
+/// local points from level k-1's. Every point present equals the uniform refinement's point of
+/// the same provenance.
+struct SparseRefinement {
+  SubdivOptions options;
+  std::vector<SparseLevel> levels;
+  std::vector<StencilTable> stencils;
+  /// Positions (3 floats per local point) of level `level`.
+  std::vector<float> positions(const Mesh& cage, int level) const;
+};
+
+/// Refines only where asked, each place to its own depth (0 <= depth <= 16):
+/// - vertex_depth[v] = d: at every level 1 <= k <= d, every child of the faces around v's
+///   level-(k-1) descendant is present with complete vertices: the ring around the level-k
+///   descendant and its siblings, which is what FAS turns into patches (each has all the
+///   control points a B-spline, transition or Gregory patch needs);
+/// - face_depth[f] = d: every descendant of face f down to level d is present, with complete
+///   vertices.
+/// Either span may be empty (no requests of that kind); otherwise it has one entry per cage
+/// vertex / face. At level k the faces refined are the requested ones (faces with a vertex or
+/// face depth left) plus every face sharing a vertex with them, which keeps every child point
+/// exact and every child of a requested face whole; so the work per requested vertex is
+/// O(valence^2) per level and linear in depth, not 4^depth. Throws InputError for bad spans or
+/// cages limn cannot subdivide.
+SparseRefinement refine_sparse(const Mesh& cage, std::span<const uint8_t> vertex_depth,
+                               std::span<const uint8_t> face_depth, const SubdivOptions& options);
 
 /// Refines `cage` uniformly `depth` times (0 <= depth <= 8). Throws InputError for cages limn
 /// cannot subdivide (see the note on non-manifold input in the implementation). Memory and time
