@@ -11,6 +11,8 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
+#include <utility>
 
 #include "limn/mesh/topology.hpp"
 #include "limn/subdiv/refine.hpp"
@@ -50,8 +52,20 @@ LimitStencils limit_stencils(const RefinedLevel& L) {
   const Topology t = build_topology(nv, L.face_offsets, L.face_vertices);
   const uint32_t* fv = L.face_vertices.data();
 
-  // build_topology is deterministic, so `t` numbers edges exactly like the level's own list.
-  const std::vector<float>& sharp_of_edge = L.edge_sharpness;
+  // The level numbers its edges its own way (derived levels do not follow build_topology's
+  // order), so carry each level edge's sharpness over to the corner table's edge ids.
+  if (L.edge_vertices.size() != 2 * t.edge_count() || L.edge_sharpness.size() != t.edge_count())
+    throw std::logic_error("limit: the level's edge list does not match its faces");
+  std::vector<float> sharp_of_edge(t.edge_count(), 0.0f);
+  for (size_t e = 0; e < t.edge_count(); ++e) {
+    const uint32_t a = L.edge_vertices[2 * e], b = L.edge_vertices[2 * e + 1];
+    uint32_t id = kNone;
+    for (const auto& [from, to] : {std::pair{a, b}, std::pair{b, a}})
+      for (uint32_t i = t.vertex_offsets[from]; i < t.vertex_offsets[from + 1] && id == kNone; ++i)
+        if (fv[t.corner_next[t.vertex_corners[i]]] == to) id = t.corner_edge[t.vertex_corners[i]];
+    if (id == kNone) throw std::logic_error("limit: a level edge joins no face's corners");
+    sharp_of_edge[id] = L.edge_sharpness[e];
+  }
 
   LimitStencils out;
   for (auto* s : {&out.position, &out.tangent1, &out.tangent2}) s->offsets.reserve(nv + 1);

@@ -1,4 +1,5 @@
-// Uniform Catmull-Clark refinement with OpenSubdiv's Sdc rules, as per-level stencil tables.
+// Catmull-Clark refinement with OpenSubdiv's Sdc rules, as per-level stencil tables: uniform,
+// sparse (per-vertex / per-face depth) and lean (points of the last level only).
 //
 // References for the rules (facts, not code): OpenSubdiv 3.5 Sdc (catmarkScheme.h, scheme.h,
 // crease.cpp) and Far::TopologyRefinerFactory's tagging: boundary and non-manifold edges are
@@ -10,12 +11,19 @@
 // OpenSubdiv computes edge and vertex points from the new face points; limn expands those into
 // the previous level's vertices, so every stencil reads one level only and levels can be applied
 // (or flattened) independently.
+//
+// Topology: the cage's adjacency comes from the corner table (build_topology). A uniformly
+// refined level's adjacency is derived from its parent's in closed form, without any search:
+// child face c is parent corner c, child corner 4c+i, child edges are one per parent corner
+// (face point to edge point) then two per parent edge (edge point to each end's vertex point).
+// Sparse levels are small and use the corner table.
 #include "limn/subdiv/refine.hpp"
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <memory>
 #include <span>
@@ -29,6 +37,20 @@ namespace {
 
 constexpr float kInf = kInfiniteSharpness;
 constexpr int kMaxChannels = 16;
+
+template <class F>
+void parallel_range(size_t n, size_t grain, F&& body) {
+  if (n < 2 * grain) {
+    body(size_t(0), n);
+    return;
+  }
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, grain),
+                    [&](const tbb::blocked_range<size_t>& r) { body(r.begin(), r.end()); });
+}
+
+double ms_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
 
 bool sharp(float s) {
   return s > 0.0f;
@@ -94,87 +116,241 @@ float fractional_weight(const SubdivOptions& o, float pv, float cv, const float*
   return w > 1.0f ? 1.0f : w;
 }
 
-// A stencil under construction: weighted parent vertices, merged when finished.
-struct Accum {
+// A stencil under construction: weighted parent vertices, merged per vertex when emitted.
+struct Terms {
   std::vector<std::pair<uint32_t, double>> terms;
   void add(uint32_t v, double w) { terms.emplace_back(v, w); }
   void scale(double s) {
     for (auto& t : terms) t.second *= s;
   }
-  void append(const Accum& other, double s) {
+  void append(const Terms& other, double s) {
     for (const auto& t : other.terms) terms.emplace_back(t.first, t.second * s);
   }
   void clear() { terms.clear(); }
   void emit(StencilTable& table) {
-    std::sort(terms.begin(), terms.end(),
-              [](const auto& a, const auto& b) { return a.first < b.first; });
-    for (size_t i = 0; i < terms.size();) {
+    auto* t = terms.data();
+    const size_t n = terms.size();
+    if (n <= 24) {  // stencils are small: insertion sort beats std::sort here
+      for (size_t i = 1; i < n; ++i)
+        for (size_t j = i; j > 0 && t[j - 1].first > t[j].first; --j) std::swap(t[j - 1], t[j]);
+    } else {
+      std::sort(terms.begin(), terms.end(),
+                [](const auto& a, const auto& b) { return a.first < b.first; });
+    }
+    for (size_t i = 0; i < n;) {
       double w = 0.0;
-      const uint32_t v = terms[i].first;
-      for (; i < terms.size() && terms[i].first == v; ++i) w += terms[i].second;
+      const uint32_t v = t[i].first;
+      for (; i < n && t[i].first == v; ++i) w += t[i].second;
       table.indices.push_back(v);
       table.weights.push_back(static_cast<float>(w));
     }
     table.offsets.push_back(static_cast<uint32_t>(table.indices.size()));
+    terms.clear();
   }
 };
 
-// Adjacency of one level, as CSR arrays derived from its corner table.
-struct Adjacency {
-  Topology topo;
-  std::vector<uint32_t> edge_face_offsets, edge_faces;      // faces on each edge
-  std::vector<uint32_t> vertex_edge_offsets, vertex_edges;  // edges at each vertex
-  std::vector<uint8_t> edge_non_manifold;
+// Adjacency of one level as flat CSR arrays. On quad levels (every level after the first, and
+// all-quad cages) corners are implicit: corner i of face f is 4f + i.
+struct Adj {
+  bool quads = false;
+  std::vector<uint32_t> corner_face;       // per corner; empty on quad levels
+  std::vector<uint32_t> corner_edge;       // per corner: the edge of its outgoing half-edge
+  std::vector<uint32_t> eco{0}, ec;        // edge -> the corners on it (one per face)
+  std::vector<uint32_t> vco{0}, vc;        // vertex -> the corners at it (one per face)
+  std::vector<uint32_t> veo{0}, ve;        // vertex -> its edges
+  std::vector<uint8_t> edge_non_manifold;  // from the corner table only (the cage)
 
-  Adjacency(size_t nv, const RefinedLevel& L)
-      : topo(build_topology(nv, L.face_offsets, L.face_vertices)) {
-    const size_t ne = topo.edge_count(), nc = L.face_vertices.size();
-    edge_face_offsets.assign(ne + 1, 0);
-    for (size_t c = 0; c < nc; ++c) ++edge_face_offsets[topo.corner_edge[c] + 1];
-    for (size_t e = 0; e < ne; ++e) edge_face_offsets[e + 1] += edge_face_offsets[e];
-    edge_faces.resize(nc);
-    std::vector<uint32_t> fill(edge_face_offsets.begin(), edge_face_offsets.end() - 1);
-    for (size_t c = 0; c < nc; ++c) edge_faces[fill[topo.corner_edge[c]]++] = topo.corner_face[c];
+  uint32_t face_of(uint32_t c) const { return quads ? c >> 2 : corner_face[c]; }
+  uint32_t edge_face_count(uint32_t e) const { return eco[e + 1] - eco[e]; }
+  uint32_t vertex_face_count(uint32_t v) const { return vco[v + 1] - vco[v]; }
+  uint32_t vertex_edge_count(uint32_t v) const { return veo[v + 1] - veo[v]; }
+};
 
-    vertex_edge_offsets.assign(nv + 1, 0);
-    for (size_t e = 0; e < ne; ++e) {
-      ++vertex_edge_offsets[topo.edge_vertices[2 * e] + 1];
-      ++vertex_edge_offsets[topo.edge_vertices[2 * e + 1] + 1];
-    }
-    for (size_t v = 0; v < nv; ++v) vertex_edge_offsets[v + 1] += vertex_edge_offsets[v];
-    vertex_edges.resize(2 * ne);
-    fill.assign(vertex_edge_offsets.begin(), vertex_edge_offsets.end() - 1);
-    for (size_t e = 0; e < ne; ++e) {
-      vertex_edges[fill[topo.edge_vertices[2 * e]]++] = static_cast<uint32_t>(e);
-      vertex_edges[fill[topo.edge_vertices[2 * e + 1]]++] = static_cast<uint32_t>(e);
-    }
-    // More than two faces, or two faces that disagree on orientation: OpenSubdiv cannot order
-    // faces around such an edge and treats it as non-manifold (infinitely sharp).
-    edge_non_manifold.assign(ne, 0);
-    for (size_t c = 0; c < nc; ++c) {
-      const uint32_t t = topo.corner_twin[c], e = topo.corner_edge[c];
-      if (t == kNonManifold || (t != kNone && L.face_vertices[t] == L.face_vertices[c]))
-        edge_non_manifold[e] = 1;
-    }
+// A level's faces and edges together with its adjacency.
+struct LevelRef {
+  const RefinedLevel& L;
+  const Adj& a;
+  uint32_t next(uint32_t c) const {
+    if (a.quads) return (c & ~3u) | ((c + 1) & 3u);
+    const uint32_t f = a.corner_face[c];
+    return c + 1 == L.face_offsets[f + 1] ? L.face_offsets[f] : c + 1;
+  }
+  uint32_t prev(uint32_t c) const {
+    if (a.quads) return (c & ~3u) | ((c + 3) & 3u);
+    const uint32_t f = a.corner_face[c];
+    return c == L.face_offsets[f] ? L.face_offsets[f + 1] - 1 : c - 1;
   }
   uint32_t other_end(uint32_t e, uint32_t v) const {
-    const uint32_t a = topo.edge_vertices[2 * size_t(e)];
-    return a == v ? topo.edge_vertices[2 * size_t(e) + 1] : a;
+    const uint32_t x = L.edge_vertices[2 * size_t(e)];
+    return x == v ? L.edge_vertices[2 * size_t(e) + 1] : x;
   }
+  uint32_t face_size(uint32_t f) const { return L.face_offsets[f + 1] - L.face_offsets[f]; }
 };
 
+// Adjacency from the corner table; sets the level's edge list (build_topology's numbering).
+Adj build_adj(RefinedLevel& L, size_t nv) {
+  Topology t = build_topology(nv, L.face_offsets, L.face_vertices);
+  Adj a;
+  const size_t nf = L.face_count(), nc = L.face_vertices.size(), ne = t.edge_count();
+  a.quads = true;
+  for (size_t f = 0; f < nf && a.quads; ++f) a.quads = L.face_offsets[f + 1] == 4 * (f + 1);
+  // More than two faces, or two faces that disagree on orientation: OpenSubdiv cannot order
+  // faces around such an edge and treats it as non-manifold (infinitely sharp).
+  a.edge_non_manifold.assign(ne, 0);
+  for (size_t c = 0; c < nc; ++c) {
+    const uint32_t tw = t.corner_twin[c];
+    if (tw == kNonManifold || (tw != kNone && L.face_vertices[tw] == L.face_vertices[c]))
+      a.edge_non_manifold[t.corner_edge[c]] = 1;
+  }
+  a.eco.assign(ne + 1, 0);
+  for (size_t c = 0; c < nc; ++c) ++a.eco[t.corner_edge[c] + 1];
+  for (size_t e = 0; e < ne; ++e) a.eco[e + 1] += a.eco[e];
+  a.ec.resize(nc);
+  std::vector<uint32_t> fill(a.eco.begin(), a.eco.end() - 1);
+  for (size_t c = 0; c < nc; ++c) a.ec[fill[t.corner_edge[c]]++] = static_cast<uint32_t>(c);
+
+  a.veo.assign(nv + 1, 0);
+  for (size_t e = 0; e < ne; ++e) {
+    ++a.veo[t.edge_vertices[2 * e] + 1];
+    ++a.veo[t.edge_vertices[2 * e + 1] + 1];
+  }
+  for (size_t v = 0; v < nv; ++v) a.veo[v + 1] += a.veo[v];
+  a.ve.resize(2 * ne);
+  fill.assign(a.veo.begin(), a.veo.end() - 1);
+  for (size_t e = 0; e < ne; ++e) {
+    a.ve[fill[t.edge_vertices[2 * e]]++] = static_cast<uint32_t>(e);
+    a.ve[fill[t.edge_vertices[2 * e + 1]]++] = static_cast<uint32_t>(e);
+  }
+  if (!a.quads) a.corner_face = std::move(t.corner_face);
+  a.corner_edge = std::move(t.corner_edge);
+  a.vco = std::move(t.vertex_offsets);
+  a.vc = std::move(t.vertex_corners);
+  L.edge_vertices = std::move(t.edge_vertices);
+  return a;
+}
+
+// The faces of the uniformly refined child (each parent corner c becomes quad c: vertex point,
+// edge point of the outgoing edge, face point, edge point of the incoming edge) and, when
+// `ca` is given, the child's edges and adjacency in closed form.
+void derive_child(const RefinedLevel& P, const Adj& pa, RefinedLevel& C, Adj* ca) {
+  const LevelRef pl{P, pa};
+  const uint32_t F = uint32_t(P.face_count()), E = uint32_t(P.edge_count()),
+                 V = uint32_t(P.vertex_count()), NC = uint32_t(P.face_vertices.size());
+  const uint32_t* fv = P.face_vertices.data();
+  const uint32_t* ev = P.edge_vertices.data();
+  const uint32_t* ce = pa.corner_edge.data();
+  constexpr size_t kGrain = 1 << 13;
+  auto half = [&](uint32_t e, uint32_t v) { return NC + 2 * e + (ev[2 * size_t(e)] == v ? 0 : 1); };
+
+  C.face_offsets.resize(size_t(NC) + 1);
+  C.face_vertices.resize(4 * size_t(NC));
+  C.face_hole.resize(NC);
+  if (ca) {
+    ca->quads = true;
+    ca->corner_face.clear();
+    ca->corner_edge.resize(4 * size_t(NC));
+  }
+  parallel_range(F, kGrain, [&](size_t b, size_t e) {
+    for (size_t f = b; f < e; ++f) {
+      for (uint32_t c = P.face_offsets[f]; c < P.face_offsets[f + 1]; ++c) {
+        const uint32_t p = pl.prev(c), e0 = ce[c], e1 = ce[p];
+        uint32_t* q = &C.face_vertices[4 * size_t(c)];
+        q[0] = F + E + fv[c], q[1] = F + e0, q[2] = uint32_t(f), q[3] = F + e1;
+        C.face_offsets[c] = 4 * c;
+        C.face_hole[c] = P.face_hole[f];
+        if (ca) {
+          uint32_t* k = &ca->corner_edge[4 * size_t(c)];
+          k[0] = half(e0, fv[c]), k[1] = c, k[2] = p, k[3] = half(e1, fv[c]);
+        }
+      }
+    }
+  });
+  C.face_offsets[NC] = 4 * NC;
+  if (!ca) return;
+
+  const size_t NE = size_t(NC) + 2 * size_t(E);
+  C.edge_vertices.resize(2 * NE);
+  ca->eco.resize(NE + 1);
+  ca->ec.resize(4 * size_t(NC));
+  ca->vco.resize(size_t(F) + E + V + 1);
+  ca->vc.resize(4 * size_t(NC));
+  ca->veo.resize(size_t(F) + E + V + 1);
+  ca->ve.resize(2 * NE);
+  ca->edge_non_manifold.clear();
+  // Per parent face: the interior edges (one per corner) and the face point's rings.
+  parallel_range(F, kGrain, [&](size_t b, size_t e) {
+    for (size_t f = b; f < e; ++f) {
+      const uint32_t o = P.face_offsets[f];
+      ca->vco[f] = o;
+      ca->veo[f] = o;
+      for (uint32_t c = o; c < P.face_offsets[f + 1]; ++c) {
+        C.edge_vertices[2 * size_t(c)] = uint32_t(f);
+        C.edge_vertices[2 * size_t(c) + 1] = F + ce[c];
+        ca->eco[c] = 2 * c;
+        ca->ec[2 * size_t(c)] = 4 * c + 1;
+        ca->ec[2 * size_t(c) + 1] = 4 * pl.next(c) + 2;
+        ca->vc[c] = 4 * c + 2;
+        ca->ve[c] = c;
+      }
+    }
+  });
+  // Per parent edge: its two halves and the edge point's rings.
+  parallel_range(E, kGrain, [&](size_t b, size_t e_end) {
+    for (size_t e = b; e < e_end; ++e) {
+      const uint32_t k0 = pa.eco[e], m = pa.eco[e + 1] - k0;
+      const size_t vbase = size_t(NC) + 2 * size_t(k0);  // ep(e)'s corners
+      ca->vco[F + e] = uint32_t(vbase);
+      const size_t ebase = size_t(NC) + 2 * e + k0;  // ep(e)'s edges
+      ca->veo[F + e] = uint32_t(ebase);
+      ca->ve[ebase] = uint32_t(NC + 2 * e);
+      ca->ve[ebase + 1] = uint32_t(NC + 2 * e + 1);
+      for (uint32_t j = 0; j < 2; ++j) {
+        const size_t id = size_t(NC) + 2 * e + j;
+        const uint32_t a = ev[2 * e + j];
+        C.edge_vertices[2 * id] = F + uint32_t(e);
+        C.edge_vertices[2 * id + 1] = F + E + a;
+        const size_t o = 2 * size_t(NC) + 2 * size_t(k0) + size_t(j) * m;
+        ca->eco[id] = uint32_t(o);
+        for (uint32_t i = 0; i < m; ++i) {
+          const uint32_t c = pa.ec[k0 + i];
+          ca->ec[o + i] = fv[c] == a ? 4 * c : 4 * pl.next(c) + 3;
+        }
+      }
+      for (uint32_t i = 0; i < m; ++i) {
+        const uint32_t c = pa.ec[k0 + i];
+        ca->vc[vbase + 2 * i] = 4 * c + 1;
+        ca->vc[vbase + 2 * i + 1] = 4 * pl.next(c) + 3;
+        ca->ve[ebase + 2 + i] = c;
+      }
+    }
+  });
+  // Per parent vertex: the vertex point's rings.
+  parallel_range(V, kGrain, [&](size_t b, size_t e) {
+    for (size_t v = b; v < e; ++v) {
+      const uint32_t c0 = pa.vco[v], e0 = pa.veo[v];
+      const size_t cbase = 3 * size_t(NC) + c0, ebase = 2 * size_t(NC) + 2 * size_t(E) + e0;
+      ca->vco[F + E + v] = uint32_t(cbase);
+      ca->veo[F + E + v] = uint32_t(ebase);
+      for (uint32_t i = c0; i < pa.vco[v + 1]; ++i) ca->vc[cbase + (i - c0)] = 4 * pa.vc[i];
+      for (uint32_t i = e0; i < pa.veo[v + 1]; ++i)
+        ca->ve[ebase + (i - e0)] = half(pa.ve[i], uint32_t(v));
+    }
+  });
+  ca->eco[NE] = 4 * NC;
+  ca->vco[size_t(F) + E + V] = 4 * NC;
+  ca->veo[size_t(F) + E + V] = uint32_t(2 * NE);
+}
+
 // Level 0 sharpness: tags, then boundary, non-manifold and corner sharpening.
-void init_cage_level(const Mesh& cage, const SubdivOptions& o, const Adjacency& adj,
-                     RefinedLevel& L) {
-  const Topology& t = adj.topo;
-  const size_t nv = cage.vertex_count(), ne = t.edge_count();
-  L.edge_vertices = t.edge_vertices;
+void init_cage_level(const Mesh& cage, const SubdivOptions& o, const Adj& adj, RefinedLevel& L) {
+  const LevelRef lr{L, adj};
+  const size_t nv = cage.vertex_count(), ne = L.edge_vertices.size() / 2;
   L.edge_sharpness.assign(ne, 0.0f);
   for (size_t i = 0; i < cage.crease_sharpness.size(); ++i) {
     const uint32_t a = cage.crease_edges[2 * i], b = cage.crease_edges[2 * i + 1];
     uint32_t found = kNone;
-    for (uint32_t k = adj.vertex_edge_offsets[a]; k < adj.vertex_edge_offsets[a + 1]; ++k)
-      if (adj.other_end(adj.vertex_edges[k], a) == b) found = adj.vertex_edges[k];
+    for (uint32_t k = adj.veo[a]; k < adj.veo[a + 1]; ++k)
+      if (lr.other_end(adj.ve[k], a) == b) found = adj.ve[k];
     if (found == kNone)
       throw InputError(
           fmt::format("crease tag {} names vertices {} and {}, which share no edge", i, a, b));
@@ -185,15 +361,14 @@ void init_cage_level(const Mesh& cage, const SubdivOptions& o, const Adjacency& 
   // The non-manifold test OpenSubdiv's tagging uses: faces around the vertex do not form a
   // single fan (or a non-manifold edge touches it).
   auto count_edges = [&](uint32_t v, int& nm_edges, int& boundary) {
-    for (uint32_t k = adj.vertex_edge_offsets[v]; k < adj.vertex_edge_offsets[v + 1]; ++k) {
-      nm_edges += adj.edge_non_manifold[adj.vertex_edges[k]];
-      boundary += t.edge_faces[adj.vertex_edges[k]] == 1;
+    for (uint32_t k = adj.veo[v]; k < adj.veo[v + 1]; ++k) {
+      nm_edges += adj.edge_non_manifold[adj.ve[k]];
+      boundary += adj.edge_face_count(adj.ve[k]) == 1;
     }
   };
   std::vector<uint8_t> vertex_nm(nv, 0);
   for (uint32_t v = 0; v < nv; ++v) {
-    const uint32_t nedges = adj.vertex_edge_offsets[v + 1] - adj.vertex_edge_offsets[v];
-    const uint32_t nfaces = t.vertex_face_count(v);
+    const uint32_t nedges = adj.vertex_edge_count(v), nfaces = adj.vertex_face_count(v);
     int nm_edges = 0, boundary = 0;
     count_edges(v, nm_edges, boundary);
     vertex_nm[v] = nm_edges > 0 || (nfaces != nedges && (nfaces + 1 != nedges || boundary != 2));
@@ -202,27 +377,25 @@ void init_cage_level(const Mesh& cage, const SubdivOptions& o, const Adjacency& 
   // explicitly infinitely sharp are excluded, as holes (tested before boundaries are sharpened).
   if (o.boundary == BoundaryInterpolation::none) {
     for (uint32_t v = 0; v < nv; ++v) {
-      const uint32_t k0 = adj.vertex_edge_offsets[v], nedges = adj.vertex_edge_offsets[v + 1] - k0;
-      if (nedges == t.vertex_face_count(v) && !vertex_nm[v]) continue;
+      if (adj.vertex_edge_count(v) == adj.vertex_face_count(v) && !vertex_nm[v]) continue;
       bool exclude = false;
-      for (uint32_t k = k0; k < k0 + nedges && !exclude; ++k) {
-        const uint32_t e = adj.vertex_edges[k];
-        exclude = t.edge_faces[e] == 1 && L.edge_sharpness[e] < kInf;
+      for (uint32_t k = adj.veo[v]; k < adj.veo[v + 1] && !exclude; ++k) {
+        const uint32_t e = adj.ve[k];
+        exclude = adj.edge_face_count(e) == 1 && L.edge_sharpness[e] < kInf;
       }
       if (exclude)
-        for (uint32_t i = t.vertex_offsets[v]; i < t.vertex_offsets[v + 1]; ++i)
-          L.face_hole[t.corner_face[t.vertex_corners[i]]] = 1;
+        for (uint32_t i = adj.vco[v]; i < adj.vco[v + 1]; ++i)
+          L.face_hole[adj.face_of(adj.vc[i])] = 1;
     }
   }
-  for (size_t e = 0; e < ne; ++e)
-    if (t.edge_faces[e] == 1 || adj.edge_non_manifold[e]) L.edge_sharpness[e] = kInf;
+  for (uint32_t e = 0; e < ne; ++e)
+    if (adj.edge_face_count(e) == 1 || adj.edge_non_manifold[e]) L.edge_sharpness[e] = kInf;
 
   L.vertex_sharpness.assign(nv, 0.0f);
   for (size_t i = 0; i < cage.corner_vertices.size(); ++i)
     L.vertex_sharpness[cage.corner_vertices[i]] = std::min(cage.corner_sharpness[i], kInf);
   for (uint32_t v = 0; v < nv; ++v) {
-    const uint32_t nedges = adj.vertex_edge_offsets[v + 1] - adj.vertex_edge_offsets[v];
-    const uint32_t nfaces = t.vertex_face_count(v);
+    const uint32_t nedges = adj.vertex_edge_count(v), nfaces = adj.vertex_face_count(v);
     int nm_edges = 0, boundary = 0;
     count_edges(v, nm_edges, boundary);
     if (nfaces == 1 && nedges == 2) {
@@ -249,6 +422,7 @@ struct Selection {
   uint32_t vertex(uint32_t i) const { return all ? i : vertices[i]; }
   uint32_t eslot(uint32_t e) const { return all ? e : edge_slot[e]; }
   uint32_t vslot(uint32_t v) const { return all ? v : vertex_slot[v]; }
+  size_t points() const { return size_t(nf) + ne + nv; }
   static Selection everything(const RefinedLevel& P) {
     Selection s;
     s.nf = static_cast<uint32_t>(P.face_count());
@@ -258,219 +432,371 @@ struct Selection {
   }
 };
 
-// Builds level k+1 and the stencils from level k.
-void refine_level(const SubdivOptions& o, const RefinedLevel& P, const Adjacency& adj,
-                  const Selection& sel, RefinedLevel& C, StencilTable& S) {
-  const Topology& t = adj.topo;
-  const uint32_t F = sel.nf, E = sel.ne, NV = sel.nv;
-  auto face_verts = [&](uint32_t f) {
-    return std::span<const uint32_t>(P.face_vertices.data() + P.face_offsets[f],
-                                     P.face_offsets[f + 1] - P.face_offsets[f]);
-  };
-  auto face_point = [&](uint32_t f, double w, Accum& acc) {
-    const auto fv = face_verts(f);
-    const double wi = w / static_cast<double>(fv.size());
-    for (uint32_t v : fv) acc.add(v, wi);
-  };
+// The stencil of every child point, from the rules. One instance per thread: it owns scratch.
+class Rules {
+ public:
+  Rules(const SubdivOptions& o, const RefinedLevel& P, const Adj& a, const Selection& sel)
+      : o_(o), P_(P), a_(a), l_{P, a}, sel_(sel) {}
 
-  S = StencilTable{};
-  S.offsets.reserve(size_t(F) + E + NV + 1);
-  Accum acc, cmask;
-
-  // Face points: centroids.
-  for (uint32_t i = 0; i < F; ++i) {
-    acc.clear();
-    face_point(sel.face(i), 1.0, acc);
-    acc.emit(S);
+  // Appends the stencil of child point i (block numbering) to `out`.
+  void point(size_t i, StencilTable& out) {
+    acc_.clear();
+    if (i < sel_.nf) {
+      face_point(sel_.face(uint32_t(i)), 1.0, acc_);
+    } else if (i < size_t(sel_.nf) + sel_.ne) {
+      edge_point(sel_.edge(uint32_t(i - sel_.nf)));
+    } else {
+      vertex_point(sel_.vertex(uint32_t(i - sel_.nf - sel_.ne)));
+    }
+    acc_.emit(out);
   }
 
-  // Edge points.
-  for (uint32_t ei = 0; ei < E; ++ei) {
-    const uint32_t e = sel.edge(ei);
-    acc.clear();
-    const uint32_t a = t.edge_vertices[2 * size_t(e)], b = t.edge_vertices[2 * size_t(e) + 1];
-    const float s = P.edge_sharpness[e];
-    const uint32_t f0 = adj.edge_face_offsets[e], nfe = adj.edge_face_offsets[e + 1] - f0;
-    auto smooth = [&](double blend) {  // blend: weight of the sharp (midpoint) mask
-      double vw = 0.25, fw = nfe == 2 ? 0.25 : 0.5 / nfe;
-      std::vector<double> fws(nfe, fw);
-      if (o.smooth_triangles && nfe == 2) {
-        const uint32_t fa = adj.edge_faces[f0], fb = adj.edge_faces[f0 + 1];
-        const bool ta = face_verts(fa).size() == 3, tb = face_verts(fb).size() == 3;
-        if (ta || tb) {
-          const double w0 = ta ? 0.470 : 0.25, w1 = tb ? 0.470 : 0.25;
-          fw = 0.5 * (static_cast<double>(static_cast<float>(w0)) +
-                      static_cast<double>(static_cast<float>(w1)));
-          vw = 0.5 * (1.0 - 2.0 * fw);
-          fws.assign(2, fw);
+ private:
+  void face_point(uint32_t f, double w, Terms& t) const {
+    const uint32_t b = P_.face_offsets[f], n = P_.face_offsets[f + 1] - b;
+    const double wi = w / double(n);
+    for (uint32_t c = b; c < b + n; ++c) t.add(P_.face_vertices[c], wi);
+  }
+
+  // Smooth edge mask, blended with the midpoint by `blend` (the sharp mask's weight).
+  void smooth_edge(uint32_t e, uint32_t a, uint32_t b, double blend) {
+    const uint32_t k0 = a_.eco[e], nfe = a_.eco[e + 1] - k0;
+    double vw = 0.25, fw = nfe == 2 ? 0.25 : 0.5 / nfe;
+    if (nfe == 2) {
+      const uint32_t ca = a_.ec[k0], cb = a_.ec[k0 + 1];
+      const uint32_t fa = a_.face_of(ca), fb = a_.face_of(cb);
+      const bool ta = l_.face_size(fa) == 3, tb = l_.face_size(fb) == 3;
+      if (o_.smooth_triangles && (ta || tb)) {
+        const double w0 = ta ? 0.470 : 0.25, w1 = tb ? 0.470 : 0.25;
+        fw = 0.5 * (double(float(w0)) + double(float(w1)));
+        vw = 0.5 * (1.0 - 2.0 * fw);
+      } else if (blend == 0.0 && l_.face_size(fa) == 4 && l_.face_size(fb) == 4) {
+        // Two quads: 3/8 on the ends, 1/16 on the far vertices of each face.
+        acc_.add(a, 0.375), acc_.add(b, 0.375);
+        for (uint32_t c : {ca, cb}) {
+          const uint32_t n2 = l_.next(l_.next(c));
+          acc_.add(P_.face_vertices[n2], 0.0625);
+          acc_.add(P_.face_vertices[l_.next(n2)], 0.0625);
         }
-      }
-      acc.add(a, blend * 0.5 + (1.0 - blend) * vw);
-      acc.add(b, blend * 0.5 + (1.0 - blend) * vw);
-      for (uint32_t i = 0; i < nfe; ++i)
-        face_point(adj.edge_faces[f0 + i], fws[i] * (1.0 - blend), acc);
-    };
-    if (!sharp(s)) {
-      smooth(0.0);
-    } else {
-      // The child rule of the edge point: its two half-edges' decayed sharpness.
-      float cs[2];
-      for (int end = 0; end < 2; ++end) {
-        const uint32_t v = end == 0 ? a : b;
-        if (o.crease_method != CreaseMethod::chaikin) {
-          cs[end] = decrement(s);
-        } else {
-          float buf_p[64], buf_c[64];
-          std::vector<float> hp, hc;
-          const uint32_t k0 = adj.vertex_edge_offsets[v], n = adj.vertex_edge_offsets[v + 1] - k0;
-          float* pe = n <= 64 ? buf_p : (hp.resize(n), hp.data());
-          float* ce = n <= 64 ? buf_c : (hc.resize(n), hc.data());
-          uint32_t self = 0;
-          for (uint32_t k = 0; k < n; ++k) {
-            pe[k] = P.edge_sharpness[adj.vertex_edges[k0 + k]];
-            if (adj.vertex_edges[k0 + k] == e) self = k;
-          }
-          child_edge_sharpness(o, pe, int(n), ce);
-          cs[end] = ce[self];
-        }
-      }
-      const Rule child = vertex_rule(0.0f, int(sharp(cs[0])) + int(sharp(cs[1])));
-      if (child == kCrease) {
-        acc.add(a, 0.5);
-        acc.add(b, 0.5);
-      } else {
-        smooth(static_cast<double>(s));
+        return;
       }
     }
-    acc.emit(S);
+    acc_.add(a, blend * 0.5 + (1.0 - blend) * vw);
+    acc_.add(b, blend * 0.5 + (1.0 - blend) * vw);
+    for (uint32_t i = 0; i < nfe; ++i)
+      face_point(a_.face_of(a_.ec[k0 + i]), fw * (1.0 - blend), acc_);
   }
 
-  // Vertex points.
-  std::vector<float> pe, ce;
-  C.vertex_sharpness.assign(size_t(F) + E + NV, 0.0f);
-  for (uint32_t vi = 0; vi < NV; ++vi) {
-    const uint32_t v = sel.vertex(vi);
-    acc.clear();
-    const uint32_t k0 = adj.vertex_edge_offsets[v], n = adj.vertex_edge_offsets[v + 1] - k0;
-    const uint32_t s0 = t.vertex_offsets[v], nfaces = t.vertex_offsets[v + 1] - s0;
-    pe.resize(n), ce.resize(n);
+  // Sharpness of edge e's child half at end v (Chaikin needs v's other edges).
+  float child_half_sharpness(uint32_t e, uint32_t v) {
+    const float s = P_.edge_sharpness[e];
+    if (o_.crease_method != CreaseMethod::chaikin) return decrement(s);
+    const uint32_t k0 = a_.veo[v], n = a_.veo[v + 1] - k0;
+    pe_.resize(n), ce_.resize(n);
+    uint32_t self = 0;
+    for (uint32_t k = 0; k < n; ++k) {
+      pe_[k] = P_.edge_sharpness[a_.ve[k0 + k]];
+      if (a_.ve[k0 + k] == e) self = k;
+    }
+    child_edge_sharpness(o_, pe_.data(), int(n), ce_.data());
+    return ce_[self];
+  }
+
+  void edge_point(uint32_t e) {
+    const uint32_t a = P_.edge_vertices[2 * size_t(e)], b = P_.edge_vertices[2 * size_t(e) + 1];
+    const float s = P_.edge_sharpness[e];
+    if (!sharp(s)) return smooth_edge(e, a, b, 0.0);
+    // The child rule of the edge point: its two halves' decayed sharpness.
+    const int sharp_halves =
+        int(sharp(child_half_sharpness(e, a))) + int(sharp(child_half_sharpness(e, b)));
+    if (vertex_rule(0.0f, sharp_halves) == kCrease) {
+      acc_.add(a, 0.5), acc_.add(b, 0.5);
+    } else {
+      smooth_edge(e, a, b, double(s));
+    }
+  }
+
+  void smooth_vertex(uint32_t v, Terms& m) const {
+    const uint32_t k0 = a_.veo[v], n = a_.veo[v + 1] - k0;
+    const uint32_t s0 = a_.vco[v], nfaces = a_.vco[v + 1] - s0;
+    if (nfaces != n)
+      throw InputError(fmt::format(
+          "vertex {} needs the smooth rule but is on a boundary or non-manifold (internal "
+          "tagging error)",
+          v));
+    const double dn = n, w = 1.0 / (dn * dn);
+    bool quads = a_.quads;
+    if (!quads) {
+      quads = true;
+      for (uint32_t i = 0; i < nfaces && quads; ++i)
+        quads = l_.face_size(a_.face_of(a_.vc[s0 + i])) == 4;
+    }
+    if (quads) {
+      // Every face a quad: v, the edge neighbours and the face diagonals, merged in closed form.
+      m.add(v, (dn - 2.0) / dn + 0.25 / dn);
+      for (uint32_t k = 0; k < n; ++k) m.add(l_.other_end(a_.ve[k0 + k], v), 1.5 * w);
+      for (uint32_t i = 0; i < nfaces; ++i)
+        m.add(P_.face_vertices[l_.next(l_.next(a_.vc[s0 + i]))], 0.25 * w);
+      return;
+    }
+    m.add(v, (dn - 2.0) / dn);
+    for (uint32_t k = 0; k < n; ++k) m.add(l_.other_end(a_.ve[k0 + k], v), w);
+    for (uint32_t i = 0; i < nfaces; ++i) face_point(a_.face_of(a_.vc[s0 + i]), w, m);
+  }
+
+  void sharp_vertex(uint32_t v, Rule r, const float* es, Terms& m) const {
+    if (r != kCrease) {
+      m.add(v, 1.0);
+      return;
+    }
+    const uint32_t k0 = a_.veo[v], n = a_.veo[v + 1] - k0;
+    m.add(v, 0.75);
+    for (uint32_t k = 0; k < n; ++k)
+      if (sharp(es[k])) m.add(l_.other_end(a_.ve[k0 + k], v), 0.125);
+  }
+
+  void vertex_point(uint32_t v) {
+    const uint32_t k0 = a_.veo[v], n = a_.veo[v + 1] - k0;
+    pe_.resize(n), ce_.resize(n);
     int sharp_edges = 0;
     for (uint32_t k = 0; k < n; ++k) {
-      pe[k] = P.edge_sharpness[adj.vertex_edges[k0 + k]];
-      sharp_edges += sharp(pe[k]);
+      pe_[k] = P_.edge_sharpness[a_.ve[k0 + k]];
+      sharp_edges += sharp(pe_[k]);
     }
-    const float pv = P.vertex_sharpness[v], cv = decrement(pv);
-    C.vertex_sharpness[F + E + vi] = cv;
+    const float pv = P_.vertex_sharpness[v], cv = decrement(pv);
     const Rule prule = vertex_rule(pv, sharp_edges);
-
-    auto smooth_mask = [&](Accum& m) {
-      const double dn = n;
-      m.add(v, (dn - 2.0) / dn);
-      const double w = 1.0 / (dn * dn);
-      for (uint32_t k = 0; k < n; ++k) m.add(adj.other_end(adj.vertex_edges[k0 + k], v), w);
-      for (uint32_t i = 0; i < nfaces; ++i)
-        face_point(t.corner_face[t.vertex_corners[s0 + i]], w, m);
-    };
-    auto sharp_mask = [&](Rule r, const float* es, Accum& m) {
-      if (r == kCrease) {
-        m.add(v, 0.75);
-        // The first and last sharp edges in the vertex's edge order (only two are sharp).
-        int first = -1, last = -1;
-        for (uint32_t k = 0; k < n; ++k)
-          if (sharp(es[k])) last = int(k), first = first < 0 ? int(k) : first;
-        m.add(adj.other_end(adj.vertex_edges[k0 + uint32_t(first)], v), 0.125);
-        m.add(adj.other_end(adj.vertex_edges[k0 + uint32_t(last)], v), 0.125);
-      } else {
-        m.add(v, 1.0);
-      }
-    };
-    auto check_smooth = [&] {
-      if (nfaces != n)
-        throw InputError(
-            fmt::format("vertex {} needs the smooth rule but is on a boundary or "
-                        "non-manifold (internal tagging error)",
-                        v));
-    };
-
-    if (prule == kSmooth || prule == kDart) {
-      check_smooth();
-      smooth_mask(acc);
+    if (prule == kSmooth || prule == kDart) return smooth_vertex(v, acc_);
+    sharp_vertex(v, prule, pe_.data(), acc_);
+    child_edge_sharpness(o_, pe_.data(), int(n), ce_.data());
+    int child_sharp = 0;
+    for (uint32_t k = 0; k < n; ++k) child_sharp += sharp(ce_[k]);
+    const Rule crule = vertex_rule(cv, child_sharp);
+    if (crule == prule) return;
+    cmask_.clear();
+    if (crule == kSmooth || crule == kDart) {
+      smooth_vertex(v, cmask_);
     } else {
-      sharp_mask(prule, pe.data(), acc);
-      child_edge_sharpness(o, pe.data(), int(n), ce.data());
-      int child_sharp = 0;
-      for (uint32_t k = 0; k < n; ++k) child_sharp += sharp(ce[k]);
-      const Rule crule = vertex_rule(cv, child_sharp);
-      if (crule != prule) {
-        cmask.clear();
-        if (crule == kSmooth || crule == kDart) {
-          check_smooth();
-          smooth_mask(cmask);
-        } else {
-          sharp_mask(crule, ce.data(), cmask);
-        }
-        const double pw = fractional_weight(o, pv, cv, pe.data(), ce.data(), int(n));
-        acc.scale(pw);
-        acc.append(cmask, 1.0 - pw);
-      }
+      sharp_vertex(v, crule, ce_.data(), cmask_);
     }
-    acc.emit(S);
+    const double pw = fractional_weight(o_, pv, cv, pe_.data(), ce_.data(), int(n));
+    acc_.scale(pw);
+    acc_.append(cmask_, 1.0 - pw);
   }
 
-  // Child topology: each parent face of n corners becomes n quads (vertex point, edge point of
-  // the outgoing edge, face point, edge point of the incoming edge), keeping orientation.
+  const SubdivOptions& o_;
+  const RefinedLevel& P_;
+  const Adj& a_;
+  LevelRef l_;
+  const Selection& sel_;
+  Terms acc_, cmask_;
+  std::vector<float> pe_, ce_;
+};
+
+constexpr size_t kStencilChunk = 1 << 14;
+
+// Calls body(first point, table) for consecutive chunks of the child points, in parallel; each
+// table holds its chunk's stencils.
+template <class Body>
+void for_stencil_chunks(const SubdivOptions& o, const RefinedLevel& P, const Adj& a,
+                        const Selection& sel, Body&& body) {
+  const size_t n = sel.points(), chunks = (n + kStencilChunk - 1) / kStencilChunk;
+  auto run = [&](size_t chunk) {
+    Rules rules(o, P, a, sel);
+    StencilTable t;
+    const size_t b = chunk * kStencilChunk, e = std::min(n, b + kStencilChunk);
+    t.offsets.reserve(e - b + 1);
+    t.indices.reserve(8 * (e - b));
+    t.weights.reserve(8 * (e - b));
+    for (size_t i = b; i < e; ++i) rules.point(i, t);
+    body(b, t);
+  };
+  if (chunks <= 1) {
+    if (n) run(0);
+    return;
+  }
+  tbb::parallel_for(size_t(0), chunks, run);
+}
+
+// All the child points' stencils as one table.
+StencilTable build_stencils(const SubdivOptions& o, const RefinedLevel& P, const Adj& a,
+                            const Selection& sel) {
+  const size_t n = sel.points(), chunks = (n + kStencilChunk - 1) / kStencilChunk;
+  if (chunks <= 1) {
+    StencilTable t;
+    Rules rules(o, P, a, sel);
+    for (size_t i = 0; i < n; ++i) rules.point(i, t);
+    return t;
+  }
+  std::vector<StencilTable> parts(chunks);
+  for_stencil_chunks(o, P, a, sel,
+                     [&](size_t b, StencilTable& t) { parts[b / kStencilChunk] = std::move(t); });
+  std::vector<size_t> base(chunks + 1, 0);
+  for (size_t c = 0; c < chunks; ++c) base[c + 1] = base[c] + parts[c].indices.size();
+  if (base[chunks] > UINT32_MAX)
+    throw InputError(
+        fmt::format("refinement level needs {} stencil entries (limit 2^32)", base[chunks]));
+  StencilTable out;
+  out.offsets.resize(n + 1);
+  out.indices.resize(base[chunks]);
+  out.weights.resize(base[chunks]);
+  out.offsets[0] = 0;
+  tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
+    StencilTable& t = parts[c];
+    const size_t first = c * kStencilChunk;
+    for (size_t i = 0; i + 1 < t.offsets.size(); ++i)
+      out.offsets[first + i + 1] = uint32_t(base[c] + t.offsets[i + 1]);
+    std::copy(t.indices.begin(), t.indices.end(), out.indices.begin() + std::ptrdiff_t(base[c]));
+    std::copy(t.weights.begin(), t.weights.end(), out.weights.begin() + std::ptrdiff_t(base[c]));
+    t = StencilTable{};
+  });
+  return out;
+}
+
+// Child vertex sharpness: vertex points inherit their parent's, decayed.
+void child_vertex_sharpness(const RefinedLevel& P, const Selection& sel, RefinedLevel& C) {
+  C.vertex_sharpness.assign(sel.points(), 0.0f);
+  const size_t base = size_t(sel.nf) + sel.ne;
+  for (uint32_t i = 0; i < sel.nv; ++i)
+    C.vertex_sharpness[base + i] = decrement(P.vertex_sharpness[sel.vertex(i)]);
+}
+
+// Sharpness of half j (at end edge_vertices[2e+j]) of parent edge e in the child.
+float half_sharpness(const SubdivOptions& o, const RefinedLevel& P, const Adj& pa, size_t e,
+                     uint32_t j, std::vector<float>& pe, std::vector<float>& ce) {
+  const float s = P.edge_sharpness[e];
+  if (!sharp(s) || o.crease_method != CreaseMethod::chaikin) return decrement(s);
+  const uint32_t v = P.edge_vertices[2 * e + j], k0 = pa.veo[v], n = pa.veo[v + 1] - k0;
+  pe.resize(n), ce.resize(n);
+  uint32_t self = 0;
+  for (uint32_t k = 0; k < n; ++k) {
+    pe[k] = P.edge_sharpness[pa.ve[k0 + k]];
+    if (pa.ve[k0 + k] == e) self = k;
+  }
+  child_edge_sharpness(o, pe.data(), int(n), ce.data());
+  return ce[self];
+}
+
+// Child edge sharpness on a derived (uniform) child: only the halves of parent edges can be
+// sharp; half j of parent edge e is child edge corners + 2e + j.
+void derived_edge_sharpness(const SubdivOptions& o, const RefinedLevel& P, const Adj& pa,
+                            RefinedLevel& C) {
+  const size_t NC = P.face_vertices.size(), E = P.edge_count();
+  C.edge_sharpness.assign(NC + 2 * E, 0.0f);
+  std::vector<float> pe, ce;
+  for (size_t e = 0; e < E; ++e)
+    if (sharp(P.edge_sharpness[e]))
+      for (uint32_t j = 0; j < 2; ++j)
+        C.edge_sharpness[NC + 2 * e + j] = half_sharpness(o, P, pa, e, j, pe, ce);
+}
+
+// Child edge sharpness on a child whose edges come from the corner table (sparse levels): an
+// edge from an edge point to a vertex point is half of the parent edge.
+void table_edge_sharpness(const SubdivOptions& o, const RefinedLevel& P, const Adj& pa,
+                          const Selection& sel, RefinedLevel& C) {
+  const uint32_t F = sel.nf, E = sel.ne;
+  const size_t ne = C.edge_vertices.size() / 2;
+  C.edge_sharpness.assign(ne, 0.0f);
+  std::vector<float> pe, ce;
+  for (size_t e = 0; e < ne; ++e) {
+    const uint32_t a = C.edge_vertices[2 * e], b = C.edge_vertices[2 * e + 1];  // a < b
+    if (!(a < F + E && a >= F && b >= F + E)) continue;
+    const uint32_t pedge = sel.edge(a - F), pvert = sel.vertex(b - F - E);
+    const float s = P.edge_sharpness[pedge];
+    if (!sharp(s)) continue;
+    if (o.crease_method != CreaseMethod::chaikin) {
+      C.edge_sharpness[e] = decrement(s);
+      continue;
+    }
+    const uint32_t k0 = pa.veo[pvert], n = pa.veo[pvert + 1] - k0;
+    pe.resize(n), ce.resize(n);
+    uint32_t self = 0;
+    for (uint32_t k = 0; k < n; ++k) {
+      pe[k] = P.edge_sharpness[pa.ve[k0 + k]];
+      if (pa.ve[k0 + k] == pedge) self = k;
+    }
+    child_edge_sharpness(o, pe.data(), int(n), ce.data());
+    C.edge_sharpness[e] = ce[self];
+  }
+}
+
+// Child faces of the selected parent faces (sparse levels).
+void selected_child_faces(const RefinedLevel& P, const Adj& pa, const Selection& sel,
+                          RefinedLevel& C) {
+  const LevelRef pl{P, pa};
+  const uint32_t F = sel.nf, E = sel.ne;
   C.face_offsets.assign(1, 0);
   C.face_vertices.clear();
   C.face_hole.clear();
   for (uint32_t fi = 0; fi < F; ++fi) {
     const uint32_t f = sel.face(fi);
-    const uint32_t o0 = P.face_offsets[f], n = P.face_offsets[f + 1] - o0;
-    for (uint32_t i = 0; i < n; ++i) {
-      const uint32_t c = o0 + i;
-      C.face_vertices.insert(
-          C.face_vertices.end(),
-          {F + E + sel.vslot(P.face_vertices[c]), F + sel.eslot(t.corner_edge[c]), fi,
-           F + sel.eslot(t.corner_edge[t.corner_prev[c]])});
+    for (uint32_t c = P.face_offsets[f]; c < P.face_offsets[f + 1]; ++c) {
+      C.face_vertices.insert(C.face_vertices.end(), {F + E + sel.vslot(P.face_vertices[c]),
+                                                     F + sel.eslot(pa.corner_edge[c]), fi,
+                                                     F + sel.eslot(pa.corner_edge[pl.prev(c)])});
       C.face_offsets.push_back(static_cast<uint32_t>(C.face_vertices.size()));
       C.face_hole.push_back(P.face_hole[f]);
     }
   }
 }
 
-// Child edge sharpness, once the child's edges are known: only the halves of parent edges
-// (edge point - vertex point) can be sharp.
-void child_edges(const SubdivOptions& o, const RefinedLevel& P, const Adjacency& padj,
-                 const Selection& sel, const Adjacency& cadj, RefinedLevel& C) {
-  const uint32_t F = sel.nf, E = sel.ne;
-  const size_t ne = cadj.topo.edge_count();
-  C.edge_vertices = cadj.topo.edge_vertices;
-  C.edge_sharpness.assign(ne, 0.0f);
-  std::vector<float> pe, ce;
-  for (size_t e = 0; e < ne; ++e) {
-    const uint32_t a = C.edge_vertices[2 * e], b = C.edge_vertices[2 * e + 1];  // a < b
-    if (a < F + E && a >= F && b >= F + E) {
-      const uint32_t pedge = sel.edge(a - F), pvert = sel.vertex(b - F - E);
-      const float s = P.edge_sharpness[pedge];
-      if (!sharp(s)) continue;
-      if (o.crease_method != CreaseMethod::chaikin) {
-        C.edge_sharpness[e] = decrement(s);
-        continue;
+// The cage as level 0, with its adjacency and tags.
+Adj cage_level(const Mesh& cage, const SubdivOptions& o, RefinedLevel& L0) {
+  validate(cage, "cage");
+  L0.face_offsets = cage.face_offsets;
+  L0.face_vertices = cage.face_vertices;
+  Adj a = build_adj(L0, cage.vertex_count());
+  init_cage_level(cage, o, a, L0);
+  return a;
+}
+
+}  // namespace
+
+namespace {
+
+// Applies stencils [0, table.size()) serially; out gets table.size() points.
+void apply_serial(const StencilTable& table, size_t b, size_t e, const float* in, float* out,
+                  int channels) {
+  const uint32_t* off = table.offsets.data();
+  const uint32_t* idx = table.indices.data();
+  const float* w = table.weights.data();
+  const size_t ch = size_t(channels);
+  // Sums in double: a valence-360 vertex sums ~1000 terms, and float accumulation alone would
+  // cost ~1e-6 of the model's size per level.
+  if (channels == 3) {
+    for (size_t i = b; i < e; ++i) {
+      double x = 0, y = 0, z = 0;
+      for (uint32_t j = off[i]; j < off[i + 1]; ++j) {
+        const float* s = in + 3 * size_t(idx[j]);
+        const double wj = w[j];
+        x += wj * s[0], y += wj * s[1], z += wj * s[2];
       }
-      const uint32_t k0 = padj.vertex_edge_offsets[pvert],
-                     n = padj.vertex_edge_offsets[pvert + 1] - k0;
-      pe.resize(n), ce.resize(n);
-      uint32_t self = 0;
-      for (uint32_t k = 0; k < n; ++k) {
-        pe[k] = P.edge_sharpness[padj.vertex_edges[k0 + k]];
-        if (padj.vertex_edges[k0 + k] == pedge) self = k;
-      }
-      child_edge_sharpness(o, pe.data(), int(n), ce.data());
-      C.edge_sharpness[e] = ce[self];
+      float* o = out + 3 * i;
+      o[0] = float(x), o[1] = float(y), o[2] = float(z);
     }
+    return;
+  }
+  double acc[kMaxChannels];
+  for (size_t i = b; i < e; ++i) {
+    for (size_t k = 0; k < ch; ++k) acc[k] = 0.0;
+    for (uint32_t j = off[i]; j < off[i + 1]; ++j) {
+      const float* s = in + size_t(idx[j]) * ch;
+      const double wj = w[j];
+      for (size_t k = 0; k < ch; ++k) acc[k] += wj * s[k];
+    }
+    float* o = out + i * ch;
+    for (size_t k = 0; k < ch; ++k) o[k] = static_cast<float>(acc[k]);
   }
 }
 
 }  // namespace
+
+void apply_stencils(const StencilTable& table, const float* in, float* out, int channels) {
+  if (channels < 1 || channels > kMaxChannels)
+    throw std::invalid_argument(
+        fmt::format("apply_stencils: {} channels (1-{})", channels, kMaxChannels));
+  parallel_range(table.size(), 4096,
+                 [&](size_t b, size_t e) { apply_serial(table, b, e, in, out, channels); });
+}
 
 SubdivOptions subdiv_options(const Mesh& mesh) {
   SubdivOptions o;
@@ -478,37 +804,6 @@ SubdivOptions subdiv_options(const Mesh& mesh) {
   if (mesh.tags.crease_method != CreaseMethod::unset) o.crease_method = mesh.tags.crease_method;
   o.smooth_triangles = mesh.tags.smooth_triangles;
   return o;
-}
-
-void apply_stencils(const StencilTable& table, const float* in, float* out, int channels) {
-  if (channels < 1 || channels > kMaxChannels)
-    throw std::invalid_argument(
-        fmt::format("apply_stencils: {} channels (1-{})", channels, kMaxChannels));
-  const size_t n = table.size();
-  const uint32_t* off = table.offsets.data();
-  const uint32_t* idx = table.indices.data();
-  const float* w = table.weights.data();
-  auto body = [&](size_t b, size_t e) {
-    // Sums in double: a valence-360 vertex sums ~1000 terms, and float accumulation alone
-    // would cost ~1e-6 of the model's size per level.
-    double acc[kMaxChannels];
-    for (size_t i = b; i < e; ++i) {
-      for (int k = 0; k < channels; ++k) acc[k] = 0.0;
-      for (uint32_t j = off[i]; j < off[i + 1]; ++j) {
-        const float* src = in + size_t(idx[j]) * size_t(channels);
-        const double wj = w[j];
-        for (int k = 0; k < channels; ++k) acc[k] += wj * src[k];
-      }
-      float* o = out + i * size_t(channels);
-      for (int k = 0; k < channels; ++k) o[k] = static_cast<float>(acc[k]);
-    }
-  };
-  if (n < 4096) {
-    body(0, n);
-  } else {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 2048),
-                      [&](const tbb::blocked_range<size_t>& r) { body(r.begin(), r.end()); });
-  }
 }
 
 StencilTable compose_stencils(const StencilTable& outer, const StencilTable& inner) {
@@ -564,6 +859,125 @@ std::vector<float> UniformRefinement::positions(const Mesh& cage, int level) con
   return cur;
 }
 
+UniformRefinement refine_uniform(const Mesh& cage, int depth, const SubdivOptions& options) {
+  if (depth < 0 || depth > 8)
+    throw InputError(fmt::format("refinement depth {} out of range (0-8)", depth));
+  UniformRefinement r;
+  r.options = options;
+  r.levels.resize(size_t(depth) + 1);
+  r.stencils.resize(size_t(depth));
+  Adj a = cage_level(cage, options, r.levels[0]);
+  for (size_t k = 0; k < size_t(depth); ++k) {
+    const RefinedLevel& P = r.levels[k];
+    RefinedLevel& C = r.levels[k + 1];
+    const Selection all = Selection::everything(P);
+    r.stencils[k] = build_stencils(options, P, a, all);
+    Adj ca;
+    derive_child(P, a, C, &ca);
+    child_vertex_sharpness(P, all, C);
+    derived_edge_sharpness(options, P, a, C);
+    a = std::move(ca);
+  }
+  return r;
+}
+
+Mesh subdivide_uniform(const Mesh& cage, int depth, const SubdivOptions& options,
+                       SubdivideStats* stats) {
+  using clock = std::chrono::steady_clock;
+  if (depth < 0 || depth > 8)
+    throw InputError(fmt::format("refinement depth {} out of range (0-8)", depth));
+  SubdivideStats st;
+  auto t0 = clock::now();
+  RefinedLevel P;
+  Adj pa = cage_level(cage, options, P);
+  st.levels.push_back({P.vertex_count(), P.face_count(), P.edge_count(), 0});
+  st.topology_ms += ms_since(t0);
+  Mesh out;
+  out.tags = cage.tags;
+  if (depth == 0) {
+    out.positions = cage.positions;
+    for (size_t f = 0; f < cage.face_count(); ++f)
+      if (!P.face_hole[f]) out.add_face(cage.face(f));
+    out.crease_edges = cage.crease_edges, out.crease_sharpness = cage.crease_sharpness;
+    out.corner_vertices = cage.corner_vertices, out.corner_sharpness = cage.corner_sharpness;
+    if (stats) *stats = std::move(st);
+    return out;
+  }
+  std::vector<float> pos = cage.positions, next;
+  std::vector<float> pe, ce;
+  for (int k = 0; k < depth; ++k) {
+    const Selection all = Selection::everything(P);
+    t0 = clock::now();
+    // Stencils are built chunk by chunk, applied at once and dropped: never stored whole.
+    next.assign(3 * all.points(), 0.0f);
+    std::vector<size_t> entries((all.points() + kStencilChunk - 1) / kStencilChunk, 0);
+    for_stencil_chunks(options, P, pa, all, [&](size_t b, StencilTable& t) {
+      apply_serial(t, 0, t.size(), pos.data(), next.data() + 3 * b, 3);
+      entries[b / kStencilChunk] = t.indices.size();
+    });
+    st.stencils_ms += ms_since(t0);
+    t0 = clock::now();
+    const size_t nc = P.face_vertices.size();
+    SubdivideStats::Level counts{all.points(), nc, nc + 2 * P.edge_count(), 0};
+    for (size_t n : entries) counts.stencil_entries += n;
+    st.levels.push_back(counts);
+    pos.swap(next);
+    next = std::vector<float>();
+    RefinedLevel C;
+    if (k + 1 < depth) {
+      Adj ca;
+      derive_child(P, pa, C, &ca);
+      child_vertex_sharpness(P, all, C);
+      derived_edge_sharpness(options, P, pa, C);
+      P = std::move(C);
+      pa = std::move(ca);
+      st.topology_ms += ms_since(t0);
+      continue;
+    }
+    // The last level: faces without holes, and what sharpness is left as tags.
+    derive_child(P, pa, C, nullptr);
+    const uint32_t F = uint32_t(P.face_count()), E = uint32_t(P.edge_count());
+    for (size_t e = 0; e < E; ++e) {
+      if (!sharp(P.edge_sharpness[e])) continue;
+      for (uint32_t j = 0; j < 2; ++j) {
+        const float s = half_sharpness(options, P, pa, e, j, pe, ce);
+        if (!sharp(s)) continue;
+        out.crease_edges.insert(out.crease_edges.end(),
+                                {F + uint32_t(e), F + E + P.edge_vertices[2 * e + j]});
+        out.crease_sharpness.push_back(s);
+      }
+    }
+    for (size_t v = 0; v < P.vertex_count(); ++v) {
+      const float s = decrement(P.vertex_sharpness[v]);
+      if (!sharp(s)) continue;
+      out.corner_vertices.push_back(F + E + uint32_t(v));
+      out.corner_sharpness.push_back(s);
+    }
+    const bool holes = std::find(C.face_hole.begin(), C.face_hole.end(), 1) != C.face_hole.end();
+    if (holes) {
+      size_t w = 0;
+      for (size_t f = 0; f < C.face_hole.size(); ++f) {
+        if (C.face_hole[f]) continue;
+        std::copy_n(C.face_vertices.begin() + std::ptrdiff_t(4 * f), 4,
+                    C.face_vertices.begin() + std::ptrdiff_t(4 * w));
+        ++w;
+      }
+      C.face_vertices.resize(4 * w);
+      C.face_offsets.resize(w + 1);
+    }
+    {
+      RefinedLevel drop = std::move(P);
+      Adj drop_adj = std::move(pa);
+    }
+    out.face_offsets = std::move(C.face_offsets);
+    out.face_vertices = std::move(C.face_vertices);
+    out.positions = std::move(pos);
+    st.output_ms += ms_since(t0);
+  }
+  if (stats) *stats = std::move(st);
+  return out;
+}
+
 std::vector<float> SparseRefinement::positions(const Mesh& cage, int level) const {
   if (level < 0 || level >= int(levels.size()))
     throw InputError(fmt::format("sparse refinement: level {} not refined", level));
@@ -579,7 +993,6 @@ std::vector<float> SparseRefinement::positions(const Mesh& cage, int level) cons
 SparseRefinement refine_sparse(const Mesh& cage, std::span<const uint8_t> vertex_depth,
                                std::span<const uint8_t> face_depth, const SubdivOptions& options) {
   constexpr int kMaxSparseDepth = 16;
-  validate(cage, "cage");
   const size_t nv0 = cage.vertex_count(), nf0 = cage.face_count();
   if (!vertex_depth.empty() && vertex_depth.size() != nv0)
     throw InputError(fmt::format("sparse refinement: {} vertex depths for {} vertices",
@@ -607,13 +1020,12 @@ SparseRefinement refine_sparse(const Mesh& cage, std::span<const uint8_t> vertex
     std::copy(vertex_depth.begin(), vertex_depth.end(), L0.vertex_depth.begin());
     std::copy(face_depth.begin(), face_depth.end(), L0.face_depth.begin());
   }
-  auto adj = std::make_unique<Adjacency>(nv0, r.levels[0].level);
-  init_cage_level(cage, options, *adj, r.levels[0].level);
+  auto adj = std::make_unique<Adj>(cage_level(cage, options, r.levels[0].level));
 
   for (size_t k = 0;; ++k) {
     SparseLevel& P = r.levels[k];
     const RefinedLevel& PL = P.level;
-    const Topology& t = adj->topo;
+    const Adj& t = *adj;
     const uint32_t nf = static_cast<uint32_t>(PL.face_count()),
                    nv = static_cast<uint32_t>(PL.vertex_count()),
                    ne = static_cast<uint32_t>(PL.edge_count());
@@ -636,8 +1048,7 @@ SparseRefinement refine_sparse(const Mesh& cage, std::span<const uint8_t> vertex
       throw std::logic_error("sparse refinement: depth requests outlived the depth bound");
     for (uint32_t v = 0; v < nv; ++v)
       if (near[v])
-        for (uint32_t i = t.vertex_offsets[v]; i < t.vertex_offsets[v + 1]; ++i)
-          P.face_refined[t.corner_face[t.vertex_corners[i]]] = 1;
+        for (uint32_t i = t.vco[v]; i < t.vco[v + 1]; ++i) P.face_refined[t.face_of(t.vc[i])] = 1;
 
     Selection sel;
     sel.all = false;
@@ -667,10 +1078,11 @@ SparseRefinement refine_sparse(const Mesh& cage, std::span<const uint8_t> vertex
     sel.nv = uint32_t(sel.vertices.size());
 
     SparseLevel C;
-    StencilTable& S = r.stencils.emplace_back();
-    refine_level(options, PL, *adj, sel, C.level, S);
-    auto cadj = std::make_unique<Adjacency>(C.level.vertex_sharpness.size(), C.level);
-    child_edges(options, PL, *adj, sel, *cadj, C.level);
+    r.stencils.push_back(build_stencils(options, PL, t, sel));
+    selected_child_faces(PL, t, sel, C.level);
+    child_vertex_sharpness(PL, sel, C.level);
+    auto cadj = std::make_unique<Adj>(build_adj(C.level, sel.points()));
+    table_edge_sharpness(options, PL, t, sel, C.level);
 
     // Provenance, completeness and the depths left.
     const size_t nvc = size_t(sel.nf) + sel.ne + sel.nv;
@@ -681,15 +1093,15 @@ SparseRefinement refine_sparse(const Mesh& cage, std::span<const uint8_t> vertex
       const uint32_t a = PL.edge_vertices[2 * size_t(e)], b = PL.edge_vertices[2 * size_t(e) + 1];
       // A complete end vertex has every face of the edge; each must be refined.
       bool whole = P.vertex_complete[a] || P.vertex_complete[b];
-      for (uint32_t j = adj->edge_face_offsets[e]; j < adj->edge_face_offsets[e + 1] && whole; ++j)
-        whole = P.face_refined[adj->edge_faces[j]];
+      for (uint32_t j = t.eco[e]; j < t.eco[e + 1] && whole; ++j)
+        whole = P.face_refined[t.face_of(t.ec[j])];
       C.vertex_complete[sel.nf + i] = whole;
     }
     for (uint32_t i = 0; i < sel.nv; ++i) {
       const uint32_t v = sel.vertices[i];
       bool whole = P.vertex_complete[v];
-      for (uint32_t j = t.vertex_offsets[v]; j < t.vertex_offsets[v + 1] && whole; ++j)
-        whole = P.face_refined[t.corner_face[t.vertex_corners[j]]];
+      for (uint32_t j = t.vco[v]; j < t.vco[v + 1] && whole; ++j)
+        whole = P.face_refined[t.face_of(t.vc[j])];
       const size_t cv = size_t(sel.nf) + sel.ne + i;
       C.vertex_complete[cv] = whole;
       C.vertex_depth[cv] = P.vertex_depth[v] > 0 ? uint8_t(P.vertex_depth[v] - 1) : 0;
@@ -705,31 +1117,6 @@ SparseRefinement refine_sparse(const Mesh& cage, std::span<const uint8_t> vertex
     C.parent_edges = std::move(sel.edges);
     C.parent_vertices = std::move(sel.vertices);
     r.levels.push_back(std::move(C));
-    adj = std::move(cadj);
-  }
-  return r;
-}
-
-UniformRefinement refine_uniform(const Mesh& cage, int depth, const SubdivOptions& options) {
-  if (depth < 0 || depth > 8)
-    throw InputError(fmt::format("refinement depth {} out of range (0-8)", depth));
-  validate(cage, "cage");
-  UniformRefinement r;
-  r.options = options;
-  r.levels.resize(size_t(depth) + 1);
-  r.stencils.resize(size_t(depth));
-  RefinedLevel& L0 = r.levels[0];
-  L0.face_offsets = cage.face_offsets;
-  L0.face_vertices = cage.face_vertices;
-  auto adj = std::make_unique<Adjacency>(cage.vertex_count(), L0);
-  init_cage_level(cage, options, *adj, L0);
-  for (int k = 0; k < depth; ++k) {
-    RefinedLevel& P = r.levels[size_t(k)];
-    RefinedLevel& C = r.levels[size_t(k) + 1];
-    const Selection all = Selection::everything(P);
-    refine_level(options, P, *adj, all, C, r.stencils[size_t(k)]);
-    auto cadj = std::make_unique<Adjacency>(C.vertex_sharpness.size(), C);
-    child_edges(options, P, *adj, all, *cadj, C);
     adj = std::move(cadj);
   }
   return r;
