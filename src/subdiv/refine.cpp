@@ -116,36 +116,44 @@ float fractional_weight(const SubdivOptions& o, float pv, float cv, const float*
   return w > 1.0f ? 1.0f : w;
 }
 
-// A stencil under construction: weighted parent vertices, merged per vertex when emitted.
+// A stencil under construction: weighted parent vertices, merged per vertex as they are added
+// (stencils hold a handful of distinct vertices, so a linear scan beats sorting).
 struct Terms {
-  std::vector<std::pair<uint32_t, double>> terms;
-  void add(uint32_t v, double w) { terms.emplace_back(v, w); }
+  std::vector<uint32_t> idx;
+  std::vector<double> w;
+  size_t n = 0;
+  Terms() : idx(64), w(64) {}
+  [[gnu::always_inline]] inline void add(uint32_t v, double weight) {
+    uint32_t* ix = idx.data();
+    for (size_t i = 0; i < n; ++i)
+      if (ix[i] == v) {
+        w[i] += weight;
+        return;
+      }
+    if (n == idx.size()) grow();
+    idx[n] = v, w[n] = weight, ++n;
+  }
+  void grow() {
+    idx.resize(2 * n);
+    w.resize(2 * n);
+  }
   void scale(double s) {
-    for (auto& t : terms) t.second *= s;
+    for (size_t i = 0; i < n; ++i) w[i] *= s;
   }
   void append(const Terms& other, double s) {
-    for (const auto& t : other.terms) terms.emplace_back(t.first, t.second * s);
+    for (size_t i = 0; i < other.n; ++i) add(other.idx[i], other.w[i] * s);
   }
-  void clear() { terms.clear(); }
+  void clear() { n = 0; }
   void emit(StencilTable& table) {
-    auto* t = terms.data();
-    const size_t n = terms.size();
-    if (n <= 24) {  // stencils are small: insertion sort beats std::sort here
-      for (size_t i = 1; i < n; ++i)
-        for (size_t j = i; j > 0 && t[j - 1].first > t[j].first; --j) std::swap(t[j - 1], t[j]);
-    } else {
-      std::sort(terms.begin(), terms.end(),
-                [](const auto& a, const auto& b) { return a.first < b.first; });
+    const size_t base = table.indices.size();
+    if (base + n > table.indices.capacity()) {
+      table.indices.reserve(2 * (base + n));
+      table.weights.reserve(2 * (base + n));
     }
-    for (size_t i = 0; i < n;) {
-      double w = 0.0;
-      const uint32_t v = t[i].first;
-      for (; i < n && t[i].first == v; ++i) w += t[i].second;
-      table.indices.push_back(v);
-      table.weights.push_back(static_cast<float>(w));
-    }
-    table.offsets.push_back(static_cast<uint32_t>(table.indices.size()));
-    terms.clear();
+    table.indices.insert(table.indices.end(), idx.begin(), idx.begin() + std::ptrdiff_t(n));
+    for (size_t i = 0; i < n; ++i) table.weights.push_back(static_cast<float>(w[i]));
+    table.offsets.push_back(static_cast<uint32_t>(base + n));
+    n = 0;
   }
 };
 
@@ -230,9 +238,9 @@ Adj build_adj(RefinedLevel& L, size_t nv) {
 }
 
 // The faces of the uniformly refined child (each parent corner c becomes quad c: vertex point,
-// edge point of the outgoing edge, face point, edge point of the incoming edge) and, when
-// `ca` is given, the child's edges and adjacency in closed form.
-void derive_child(const RefinedLevel& P, const Adj& pa, RefinedLevel& C, Adj* ca) {
+// edge point of the outgoing edge, face point, edge point of the incoming edge); with `edges`
+// the child's edge list, and with `ca` its adjacency too, all in closed form.
+void derive_child(const RefinedLevel& P, const Adj& pa, RefinedLevel& C, bool edges, Adj* ca) {
   const LevelRef pl{P, pa};
   const uint32_t F = uint32_t(P.face_count()), E = uint32_t(P.edge_count()),
                  V = uint32_t(P.vertex_count()), NC = uint32_t(P.face_vertices.size());
@@ -266,26 +274,31 @@ void derive_child(const RefinedLevel& P, const Adj& pa, RefinedLevel& C, Adj* ca
     }
   });
   C.face_offsets[NC] = 4 * NC;
-  if (!ca) return;
+  if (!ca && !edges) return;
 
   const size_t NE = size_t(NC) + 2 * size_t(E);
   C.edge_vertices.resize(2 * NE);
-  ca->eco.resize(NE + 1);
-  ca->ec.resize(4 * size_t(NC));
-  ca->vco.resize(size_t(F) + E + V + 1);
-  ca->vc.resize(4 * size_t(NC));
-  ca->veo.resize(size_t(F) + E + V + 1);
-  ca->ve.resize(2 * NE);
-  ca->edge_non_manifold.clear();
+  if (ca) {
+    ca->eco.resize(NE + 1);
+    ca->ec.resize(4 * size_t(NC));
+    ca->vco.resize(size_t(F) + E + V + 1);
+    ca->vc.resize(4 * size_t(NC));
+    ca->veo.resize(size_t(F) + E + V + 1);
+    ca->ve.resize(2 * NE);
+    ca->edge_non_manifold.clear();
+  }
   // Per parent face: the interior edges (one per corner) and the face point's rings.
   parallel_range(F, kGrain, [&](size_t b, size_t e) {
     for (size_t f = b; f < e; ++f) {
       const uint32_t o = P.face_offsets[f];
-      ca->vco[f] = o;
-      ca->veo[f] = o;
       for (uint32_t c = o; c < P.face_offsets[f + 1]; ++c) {
         C.edge_vertices[2 * size_t(c)] = uint32_t(f);
         C.edge_vertices[2 * size_t(c) + 1] = F + ce[c];
+      }
+      if (!ca) continue;
+      ca->vco[f] = o;
+      ca->veo[f] = o;
+      for (uint32_t c = o; c < P.face_offsets[f + 1]; ++c) {
         ca->eco[c] = 2 * c;
         ca->ec[2 * size_t(c)] = 4 * c + 1;
         ca->ec[2 * size_t(c) + 1] = 4 * pl.next(c) + 2;
@@ -297,6 +310,14 @@ void derive_child(const RefinedLevel& P, const Adj& pa, RefinedLevel& C, Adj* ca
   // Per parent edge: its two halves and the edge point's rings.
   parallel_range(E, kGrain, [&](size_t b, size_t e_end) {
     for (size_t e = b; e < e_end; ++e) {
+      if (!ca) {
+        for (uint32_t j = 0; j < 2; ++j) {
+          const size_t id = size_t(NC) + 2 * e + j;
+          C.edge_vertices[2 * id] = F + uint32_t(e);
+          C.edge_vertices[2 * id + 1] = F + E + ev[2 * e + j];
+        }
+        continue;
+      }
       const uint32_t k0 = pa.eco[e], m = pa.eco[e + 1] - k0;
       const size_t vbase = size_t(NC) + 2 * size_t(k0);  // ep(e)'s corners
       ca->vco[F + e] = uint32_t(vbase);
@@ -324,6 +345,7 @@ void derive_child(const RefinedLevel& P, const Adj& pa, RefinedLevel& C, Adj* ca
       }
     }
   });
+  if (!ca) return;
   // Per parent vertex: the vertex point's rings.
   parallel_range(V, kGrain, [&](size_t b, size_t e) {
     for (size_t v = b; v < e; ++v) {
@@ -873,7 +895,8 @@ UniformRefinement refine_uniform(const Mesh& cage, int depth, const SubdivOption
     const Selection all = Selection::everything(P);
     r.stencils[k] = build_stencils(options, P, a, all);
     Adj ca;
-    derive_child(P, a, C, &ca);
+    const bool last = k + 1 == size_t(depth);
+    derive_child(P, a, C, true, last ? nullptr : &ca);
     child_vertex_sharpness(P, all, C);
     derived_edge_sharpness(options, P, a, C);
     a = std::move(ca);
@@ -926,7 +949,7 @@ Mesh subdivide_uniform(const Mesh& cage, int depth, const SubdivOptions& options
     RefinedLevel C;
     if (k + 1 < depth) {
       Adj ca;
-      derive_child(P, pa, C, &ca);
+      derive_child(P, pa, C, true, &ca);
       child_vertex_sharpness(P, all, C);
       derived_edge_sharpness(options, P, pa, C);
       P = std::move(C);
@@ -935,7 +958,7 @@ Mesh subdivide_uniform(const Mesh& cage, int depth, const SubdivOptions& options
       continue;
     }
     // The last level: faces without holes, and what sharpness is left as tags.
-    derive_child(P, pa, C, nullptr);
+    derive_child(P, pa, C, false, nullptr);
     const uint32_t F = uint32_t(P.face_count()), E = uint32_t(P.edge_count());
     for (size_t e = 0; e < E; ++e) {
       if (!sharp(P.edge_sharpness[e])) continue;
