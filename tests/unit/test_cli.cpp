@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "limn/mesh/io.hpp"
+#include "limn/subdiv/refine.hpp"
 
 namespace limn {
 namespace {
@@ -254,6 +255,24 @@ TEST_F(Cli, SubdivideUniformAndLimit) {
     EXPECT_EQ(b.code, 2) << bad;
   }
   EXPECT_FALSE(fs::exists(dir_ / "x.obj"));
+}
+
+TEST_F(Cli, SubdivideLeanWritesTheLastLevel) {
+  const fs::path cage = dir_ / "cage.obj", out = dir_ / "lean.ply";
+  ASSERT_EQ(limn("shape cage -o " + q(cage)).code, 0);
+  const Mesh m = read_mesh(cage);
+  const Result r = limn("subdivide " + q(cage) + " -o " + q(out) + " --uniform 3 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j["levels"].size(), 4u);
+  EXPECT_EQ(j["levels"][3]["faces"], 16 * m.corner_count());
+  EXPECT_TRUE(j["timings_ms"].contains("stencils_and_apply"));
+  EXPECT_TRUE(j["timings_ms"].contains("topology"));
+  // The written points are the uniform refinement's (PLY keeps floats exactly).
+  const Mesh s = read_mesh(out);
+  const UniformRefinement ur = refine_uniform(m, 3, subdiv_options(m));
+  EXPECT_EQ(s.positions, ur.positions(m, 3));
+  EXPECT_EQ(j["output_faces"], s.face_count());
 }
 
 }  // namespace
