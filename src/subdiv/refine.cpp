@@ -20,6 +20,7 @@
 #include "limn/subdiv/refine.hpp"
 
 #include <fmt/format.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -30,6 +31,10 @@
 #include <stdexcept>
 
 #include "limn/mesh/topology.hpp"
+
+#ifdef __linux__
+#include <sys/mman.h>
+#endif
 
 namespace limn {
 
@@ -50,6 +55,30 @@ void parallel_range(size_t n, size_t grain, F&& body) {
 
 double ms_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// Sizes a vector to n elements of `value`. Big fresh buffers are first advised to use
+// transparent huge pages: the first touch (the fill) then takes one fault per 2 MiB instead of
+// one per 4 KiB, which otherwise costs as much as the refinement itself on large levels.
+void advise_huge(void* p, size_t bytes) {
+#ifdef __linux__
+  constexpr uintptr_t kHuge = uintptr_t(2) << 20;
+  const uintptr_t b = (reinterpret_cast<uintptr_t>(p) + kHuge - 1) & ~(kHuge - 1);
+  const uintptr_t e = (reinterpret_cast<uintptr_t>(p) + bytes) & ~(kHuge - 1);
+  if (e > b) madvise(reinterpret_cast<void*>(b), e - b, MADV_HUGEPAGE);
+#else
+  (void)p, (void)bytes;
+#endif
+}
+
+template <class T>
+void fill_n_huge(std::vector<T>& v, size_t n, T value = T()) {
+  if (n * sizeof(T) >= (size_t(8) << 20) && v.capacity() < n) {
+    std::vector<T>().swap(v);
+    v.reserve(n);
+    advise_huge(v.data(), n * sizeof(T));
+  }
+  v.assign(n, value);
 }
 
 bool sharp(float s) {
@@ -250,13 +279,13 @@ void derive_child(const RefinedLevel& P, const Adj& pa, RefinedLevel& C, bool ed
   constexpr size_t kGrain = 1 << 13;
   auto half = [&](uint32_t e, uint32_t v) { return NC + 2 * e + (ev[2 * size_t(e)] == v ? 0 : 1); };
 
-  C.face_offsets.resize(size_t(NC) + 1);
-  C.face_vertices.resize(4 * size_t(NC));
-  C.face_hole.resize(NC);
+  fill_n_huge(C.face_offsets, size_t(NC) + 1);
+  fill_n_huge(C.face_vertices, 4 * size_t(NC));
+  fill_n_huge(C.face_hole, NC);
   if (ca) {
     ca->quads = true;
     ca->corner_face.clear();
-    ca->corner_edge.resize(4 * size_t(NC));
+    fill_n_huge(ca->corner_edge, 4 * size_t(NC));
   }
   parallel_range(F, kGrain, [&](size_t b, size_t e) {
     for (size_t f = b; f < e; ++f) {
@@ -277,14 +306,14 @@ void derive_child(const RefinedLevel& P, const Adj& pa, RefinedLevel& C, bool ed
   if (!ca && !edges) return;
 
   const size_t NE = size_t(NC) + 2 * size_t(E);
-  C.edge_vertices.resize(2 * NE);
+  fill_n_huge(C.edge_vertices, 2 * NE);
   if (ca) {
-    ca->eco.resize(NE + 1);
-    ca->ec.resize(4 * size_t(NC));
-    ca->vco.resize(size_t(F) + E + V + 1);
-    ca->vc.resize(4 * size_t(NC));
-    ca->veo.resize(size_t(F) + E + V + 1);
-    ca->ve.resize(2 * NE);
+    fill_n_huge(ca->eco, NE + 1);
+    fill_n_huge(ca->ec, 4 * size_t(NC));
+    fill_n_huge(ca->vco, size_t(F) + E + V + 1);
+    fill_n_huge(ca->vc, 4 * size_t(NC));
+    fill_n_huge(ca->veo, size_t(F) + E + V + 1);
+    fill_n_huge(ca->ve, 2 * NE);
     ca->edge_non_manifold.clear();
   }
   // Per parent face: the interior edges (one per corner) and the face point's rings.
@@ -622,9 +651,15 @@ template <class Body>
 void for_stencil_chunks(const SubdivOptions& o, const RefinedLevel& P, const Adj& a,
                         const Selection& sel, Body&& body) {
   const size_t n = sel.points(), chunks = (n + kStencilChunk - 1) / kStencilChunk;
+  // Per-thread tables keep their memory from chunk to chunk (unless the body takes it), so
+  // streaming a level through them touches no fresh pages.
+  tbb::enumerable_thread_specific<StencilTable> scratch;
   auto run = [&](size_t chunk) {
     Rules rules(o, P, a, sel);
-    StencilTable t;
+    StencilTable& t = scratch.local();
+    t.offsets.assign(1, 0);
+    t.indices.clear();
+    t.weights.clear();
     const size_t b = chunk * kStencilChunk, e = std::min(n, b + kStencilChunk);
     t.offsets.reserve(e - b + 1);
     t.indices.reserve(8 * (e - b));
@@ -658,9 +693,9 @@ StencilTable build_stencils(const SubdivOptions& o, const RefinedLevel& P, const
     throw InputError(
         fmt::format("refinement level needs {} stencil entries (limit 2^32)", base[chunks]));
   StencilTable out;
-  out.offsets.resize(n + 1);
-  out.indices.resize(base[chunks]);
-  out.weights.resize(base[chunks]);
+  fill_n_huge(out.offsets, n + 1);
+  fill_n_huge(out.indices, base[chunks]);
+  fill_n_huge(out.weights, base[chunks]);
   out.offsets[0] = 0;
   tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
     StencilTable& t = parts[c];
@@ -676,10 +711,12 @@ StencilTable build_stencils(const SubdivOptions& o, const RefinedLevel& P, const
 
 // Child vertex sharpness: vertex points inherit their parent's, decayed.
 void child_vertex_sharpness(const RefinedLevel& P, const Selection& sel, RefinedLevel& C) {
-  C.vertex_sharpness.assign(sel.points(), 0.0f);
+  fill_n_huge(C.vertex_sharpness, sel.points(), 0.0f);
   const size_t base = size_t(sel.nf) + sel.ne;
-  for (uint32_t i = 0; i < sel.nv; ++i)
-    C.vertex_sharpness[base + i] = decrement(P.vertex_sharpness[sel.vertex(i)]);
+  parallel_range(sel.nv, 1 << 16, [&](size_t b, size_t e) {
+    for (size_t i = b; i < e; ++i)
+      C.vertex_sharpness[base + i] = decrement(P.vertex_sharpness[sel.vertex(uint32_t(i))]);
+  });
 }
 
 // Sharpness of half j (at end edge_vertices[2e+j]) of parent edge e in the child.
@@ -703,12 +740,14 @@ float half_sharpness(const SubdivOptions& o, const RefinedLevel& P, const Adj& p
 void derived_edge_sharpness(const SubdivOptions& o, const RefinedLevel& P, const Adj& pa,
                             RefinedLevel& C) {
   const size_t NC = P.face_vertices.size(), E = P.edge_count();
-  C.edge_sharpness.assign(NC + 2 * E, 0.0f);
-  std::vector<float> pe, ce;
-  for (size_t e = 0; e < E; ++e)
-    if (sharp(P.edge_sharpness[e]))
-      for (uint32_t j = 0; j < 2; ++j)
-        C.edge_sharpness[NC + 2 * e + j] = half_sharpness(o, P, pa, e, j, pe, ce);
+  fill_n_huge(C.edge_sharpness, NC + 2 * E, 0.0f);
+  parallel_range(E, 1 << 16, [&](size_t b, size_t end) {
+    std::vector<float> pe, ce;
+    for (size_t e = b; e < end; ++e)
+      if (sharp(P.edge_sharpness[e]))
+        for (uint32_t j = 0; j < 2; ++j)
+          C.edge_sharpness[NC + 2 * e + j] = half_sharpness(o, P, pa, e, j, pe, ce);
+  });
 }
 
 // Child edge sharpness on a child whose edges come from the corner table (sparse levels): an
@@ -874,7 +913,7 @@ StencilTable cage_stencils(const UniformRefinement& r, int level) {
 std::vector<float> UniformRefinement::positions(const Mesh& cage, int level) const {
   std::vector<float> cur = cage.positions, next;
   for (int k = 0; k < level; ++k) {
-    next.resize(3 * stencils[size_t(k)].size());
+    fill_n_huge(next, 3 * stencils[size_t(k)].size(), 0.0f);
     apply_stencils(stencils[size_t(k)], cur.data(), next.data(), 3);
     cur.swap(next);
   }
@@ -932,7 +971,7 @@ Mesh subdivide_uniform(const Mesh& cage, int depth, const SubdivOptions& options
     const Selection all = Selection::everything(P);
     t0 = clock::now();
     // Stencils are built chunk by chunk, applied at once and dropped: never stored whole.
-    next.assign(3 * all.points(), 0.0f);
+    fill_n_huge(next, 3 * all.points(), 0.0f);
     std::vector<size_t> entries((all.points() + kStencilChunk - 1) / kStencilChunk, 0);
     for_stencil_chunks(options, P, pa, all, [&](size_t b, StencilTable& t) {
       apply_serial(t, 0, t.size(), pos.data(), next.data() + 3 * b, 3);
@@ -1006,7 +1045,7 @@ std::vector<float> SparseRefinement::positions(const Mesh& cage, int level) cons
     throw InputError(fmt::format("sparse refinement: level {} not refined", level));
   std::vector<float> cur = cage.positions, next;
   for (int k = 0; k < level; ++k) {
-    next.resize(3 * stencils[size_t(k)].size());
+    fill_n_huge(next, 3 * stencils[size_t(k)].size(), 0.0f);
     apply_stencils(stencils[size_t(k)], cur.data(), next.data(), 3);
     cur.swap(next);
   }
