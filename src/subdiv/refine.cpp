@@ -33,9 +33,6 @@
 
 #include "limn/mesh/topology.hpp"
 
-#ifdef __linux__
-#include <sys/mman.h>
-#endif
 #if defined(__x86_64__) && defined(__GNUC__)
 #include <immintrin.h>
 #endif
@@ -61,27 +58,11 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// Sizes a vector to n elements of `value`. Big fresh buffers are first advised to use
-// transparent huge pages: the first touch (the fill) then takes one fault per 2 MiB instead of
-// one per 4 KiB, which otherwise costs as much as the refinement itself on large levels.
-void advise_huge(void* p, size_t bytes) {
-#ifdef __linux__
-  constexpr uintptr_t kHuge = uintptr_t(2) << 20;
-  const uintptr_t b = (reinterpret_cast<uintptr_t>(p) + kHuge - 1) & ~(kHuge - 1);
-  const uintptr_t e = (reinterpret_cast<uintptr_t>(p) + bytes) & ~(kHuge - 1);
-  if (e > b) madvise(reinterpret_cast<void*>(b), e - b, MADV_HUGEPAGE);
-#else
-  (void)p, (void)bytes;
-#endif
-}
-
+// Sizes a vector to n elements of `value`, dropping any old buffer first so a level's arrays
+// never hold two copies at once.
 template <class T>
 void fill_n_huge(std::vector<T>& v, size_t n, T value = T()) {
-  if (n * sizeof(T) >= (size_t(8) << 20) && v.capacity() < n) {
-    std::vector<T>().swap(v);
-    v.reserve(n);
-    advise_huge(v.data(), n * sizeof(T));
-  }
+  if (v.capacity() < n) std::vector<T>().swap(v);
   v.assign(n, value);
 }
 
@@ -495,6 +476,11 @@ class Rules {
 
   // Appends the stencil of child point i (block numbering) to `out`.
   void point(size_t i, StencilTable& out) {
+    compute(i);
+    acc_.emit(out);
+  }
+  // The stencil of child point i, kept until write(): returns its size.
+  size_t compute(size_t i) {
     acc_.clear();
     if (i < sel_.nf) {
       face_point(sel_.face(uint32_t(i)), 1.0, acc_);
@@ -503,7 +489,11 @@ class Rules {
     } else {
       vertex_point(sel_.vertex(uint32_t(i - sel_.nf - sel_.ne)));
     }
-    acc_.emit(out);
+    return acc_.n;
+  }
+  void write(uint32_t* indices, float* weights) const {
+    for (size_t k = 0; k < acc_.n; ++k)
+      indices[k] = acc_.idx[k], weights[k] = static_cast<float>(acc_.w[k]);
   }
 
  private:
@@ -649,25 +639,26 @@ class Rules {
 
 constexpr size_t kStencilChunk = 1 << 14;
 
-// Calls body(first point, table) for consecutive chunks of the child points, in parallel; each
-// table holds its chunk's stencils.
+// Calls body(first point, table) for consecutive chunks of `chunk` child points, in parallel;
+// each table holds its chunk's stencils.
 template <class Body>
 void for_stencil_chunks(const SubdivOptions& o, const RefinedLevel& P, const Adj& a,
-                        const Selection& sel, Body&& body) {
-  const size_t n = sel.points(), chunks = (n + kStencilChunk - 1) / kStencilChunk;
+                        const Selection& sel, size_t chunk, Body&& body) {
+  const size_t n = sel.points(), chunks = (n + chunk - 1) / chunk;
   // Per-thread tables keep their memory from chunk to chunk (unless the body takes it), so
   // streaming a level through them touches no fresh pages.
   tbb::enumerable_thread_specific<StencilTable> scratch;
-  auto run = [&](size_t chunk) {
+  auto run = [&](size_t c) {
     Rules rules(o, P, a, sel);
     StencilTable& t = scratch.local();
-    t.offsets.assign(1, 0);
+    const size_t b = c * chunk, e = std::min(n, b + chunk);
+    t.offsets.clear();
     t.indices.clear();
     t.weights.clear();
-    const size_t b = chunk * kStencilChunk, e = std::min(n, b + kStencilChunk);
     t.offsets.reserve(e - b + 1);
     t.indices.reserve(8 * (e - b));
     t.weights.reserve(8 * (e - b));
+    t.offsets.push_back(0);
     for (size_t i = b; i < e; ++i) rules.point(i, t);
     body(b, t);
   };
@@ -678,37 +669,35 @@ void for_stencil_chunks(const SubdivOptions& o, const RefinedLevel& P, const Adj
   tbb::parallel_for(size_t(0), chunks, run);
 }
 
-// All the child points' stencils as one table.
+// All the child points' stencils as one table, in two passes (sizes, then entries in place):
+// computing each stencil twice costs less than holding the table twice.
 StencilTable build_stencils(const SubdivOptions& o, const RefinedLevel& P, const Adj& a,
                             const Selection& sel) {
-  const size_t n = sel.points(), chunks = (n + kStencilChunk - 1) / kStencilChunk;
-  if (chunks <= 1) {
-    StencilTable t;
-    Rules rules(o, P, a, sel);
-    for (size_t i = 0; i < n; ++i) rules.point(i, t);
-    return t;
-  }
-  std::vector<StencilTable> parts(chunks);
-  for_stencil_chunks(o, P, a, sel,
-                     [&](size_t b, StencilTable& t) { parts[b / kStencilChunk] = std::move(t); });
-  std::vector<size_t> base(chunks + 1, 0);
-  for (size_t c = 0; c < chunks; ++c) base[c + 1] = base[c] + parts[c].indices.size();
-  if (base[chunks] > UINT32_MAX)
-    throw InputError(
-        fmt::format("refinement level needs {} stencil entries (limit 2^32)", base[chunks]));
+  const size_t n = sel.points();
   StencilTable out;
-  fill_n_huge(out.offsets, n + 1);
-  fill_n_huge(out.indices, base[chunks]);
-  fill_n_huge(out.weights, base[chunks]);
-  out.offsets[0] = 0;
-  tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
-    StencilTable& t = parts[c];
-    const size_t first = c * kStencilChunk;
-    for (size_t i = 0; i + 1 < t.offsets.size(); ++i)
-      out.offsets[first + i + 1] = uint32_t(base[c] + t.offsets[i + 1]);
-    std::copy(t.indices.begin(), t.indices.end(), out.indices.begin() + std::ptrdiff_t(base[c]));
-    std::copy(t.weights.begin(), t.weights.end(), out.weights.begin() + std::ptrdiff_t(base[c]));
-    t = StencilTable{};
+  fill_n_huge(out.offsets, n + 1, 0u);
+  std::vector<uint32_t> sizes;
+  fill_n_huge(sizes, n, 0u);
+  parallel_range(n, kStencilChunk, [&](size_t b, size_t e) {
+    Rules rules(o, P, a, sel);
+    for (size_t i = b; i < e; ++i) sizes[i] = uint32_t(rules.compute(i));
+  });
+  size_t total = 0;
+  for (size_t i = 0; i < n; ++i) {
+    total += sizes[i];
+    if (total > UINT32_MAX)
+      throw InputError("refinement level needs more than 2^32 stencil entries");
+    out.offsets[i + 1] = uint32_t(total);
+  }
+  std::vector<uint32_t>().swap(sizes);
+  fill_n_huge(out.indices, total, 0u);
+  fill_n_huge(out.weights, total, 0.0f);
+  parallel_range(n, kStencilChunk, [&](size_t b, size_t e) {
+    Rules rules(o, P, a, sel);
+    for (size_t i = b; i < e; ++i) {
+      rules.compute(i);
+      rules.write(out.indices.data() + out.offsets[i], out.weights.data() + out.offsets[i]);
+    }
   });
   return out;
 }
@@ -1008,7 +997,7 @@ Mesh subdivide_uniform(const Mesh& cage, int depth, const SubdivOptions& options
     // Stencils are built chunk by chunk, applied at once and dropped: never stored whole.
     fill_n_huge(next, 3 * all.points(), 0.0f);
     std::vector<size_t> entries((all.points() + kStencilChunk - 1) / kStencilChunk, 0);
-    for_stencil_chunks(options, P, pa, all, [&](size_t b, StencilTable& t) {
+    for_stencil_chunks(options, P, pa, all, kStencilChunk, [&](size_t b, StencilTable& t) {
       apply_serial(t, 0, t.size(), pos.data(), next.data() + 3 * b, 3);
       entries[b / kStencilChunk] = t.indices.size();
     });
