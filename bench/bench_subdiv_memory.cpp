@@ -107,8 +107,8 @@ Outcome run_isolated(const std::function<size_t()>& fn, double cap_gb) {
     try {
       const auto t0 = std::chrono::steady_clock::now();
       const size_t n = fn();
-      msg[0] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
-                   .count();
+      msg[0] =
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
       msg[1] = double(n);
     } catch (const std::bad_alloc&) {
       code = 3;
