@@ -8,6 +8,7 @@
 #include <benchmark/benchmark.h>
 #include <fmt/format.h>
 #include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
 
 #include <cstring>
 #include <filesystem>
@@ -100,7 +101,8 @@ void osd_build(benchmark::State& state, const std::string& name) {
   }
 }
 
-void limn_build(benchmark::State& state, const std::string& name) {
+void limn_build(benchmark::State& state, const std::string& name, int threads) {
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
   const limn::Mesh& m = g_meshes.at(name);
   const int level = int(state.range(0));
   const limn::SubdivOptions o = limn::subdiv_options(m);
@@ -181,6 +183,91 @@ void stream_copy(benchmark::State& state) {
   state.SetBytesProcessed(int64_t(state.iterations()) * int64_t(2 * n * sizeof(float)));
 }
 
+// Sparse (feature-adaptive) refinement: OpenSubdiv's RefineAdaptive to an isolation level plus
+// its stencil table for every refined vertex, beside limn's refine_sparse with the same depth on
+// every extraordinary or tagged vertex (and one level on non-quads).
+struct SparseRequest {
+  std::vector<uint8_t> vertex, face;
+};
+
+SparseRequest sparse_request(const limn::Mesh& m, int depth) {
+  SparseRequest q;
+  q.vertex.assign(m.vertex_count(), 0);
+  q.face.assign(m.face_count(), 0);
+  std::vector<uint32_t> faces(m.vertex_count(), 0);
+  for (uint32_t v : m.face_vertices) ++faces[v];
+  std::vector<uint32_t> boundary(m.vertex_count(), 0);
+  {
+    std::map<std::pair<uint32_t, uint32_t>, int> edges;
+    for (size_t f = 0; f < m.face_count(); ++f) {
+      const auto fv = m.face(f);
+      for (size_t i = 0; i < fv.size(); ++i) {
+        const uint32_t a = fv[i], b = fv[(i + 1) % fv.size()];
+        ++edges[{std::min(a, b), std::max(a, b)}];
+      }
+    }
+    for (const auto& [e, n] : edges)
+      if (n == 1) ++boundary[e.first], ++boundary[e.second];
+  }
+  for (uint32_t v = 0; v < m.vertex_count(); ++v) {
+    const bool on_boundary = boundary[v] > 0;
+    if ((!on_boundary && faces[v] != 4) || (on_boundary && faces[v] != 2 && faces[v] != 1))
+      q.vertex[v] = uint8_t(depth);
+  }
+  for (uint32_t v : m.crease_edges) q.vertex[v] = uint8_t(depth);
+  for (uint32_t v : m.corner_vertices) q.vertex[v] = uint8_t(depth);
+  for (size_t f = 0; f < m.face_count(); ++f)
+    if (m.face_size(f) != 4) q.face[f] = 1;
+  return q;
+}
+
+void osd_sparse(benchmark::State& state, const std::string& name) {
+  const limn::Mesh& m = g_meshes.at(name);
+  const int depth = int(state.range(0));
+  size_t points = 0;
+  for (auto _ : state) {
+    OsdInput in = osd_input(m);
+    using Factory = Far::TopologyRefinerFactory<Far::TopologyDescriptor>;
+    std::unique_ptr<Far::TopologyRefiner> r(
+        Factory::Create(in.desc, Factory::Options(Sdc::SCHEME_CATMARK, osd_options(m))));
+    r->RefineAdaptive(Far::TopologyRefiner::AdaptiveOptions(depth));
+    Far::StencilTableFactory::Options so;
+    so.generateIntermediateLevels = true;
+    so.generateOffsets = true;
+    std::unique_ptr<const Far::StencilTable> st(Far::StencilTableFactory::Create(*r, so));
+    points = size_t(st->GetNumStencils());
+    benchmark::DoNotOptimize(st->GetWeights().data());
+  }
+  state.counters["points"] = double(points);
+}
+
+void limn_sparse(benchmark::State& state, const std::string& name) {
+  const limn::Mesh& m = g_meshes.at(name);
+  const int depth = int(state.range(0));
+  const SparseRequest q = sparse_request(m, depth);
+  const limn::SubdivOptions o = limn::subdiv_options(m);
+  size_t points = 0;
+  for (auto _ : state) {
+    const limn::SparseRefinement r = limn::refine_sparse(m, q.vertex, q.face, o);
+    points = 0;
+    for (size_t k = 1; k < r.levels.size(); ++k) points += r.levels[k].level.vertex_count();
+    benchmark::DoNotOptimize(r.stencils.back().weights.data());
+  }
+  state.counters["points"] = double(points);
+}
+
+void stream_copy_2t(benchmark::State& state) {
+  const size_t n = size_t(64) << 20;
+  std::vector<float> a(n, 1.0f), b(n);
+  for (auto _ : state) {
+    tbb::parallel_for(size_t(0), size_t(2), [&](size_t h) {
+      std::memcpy(b.data() + h * n / 2, a.data() + h * n / 2, n / 2 * sizeof(float));
+    });
+    benchmark::DoNotOptimize(b.data());
+  }
+  state.SetBytesProcessed(int64_t(state.iterations()) * int64_t(2 * n * sizeof(float)));
+}
+
 class Recorder : public benchmark::ConsoleReporter {
  public:
   void ReportRuns(const std::vector<Run>& runs) override {
@@ -211,7 +298,8 @@ int main(int argc, char** argv) {
           ->Unit(benchmark::kMillisecond);
     };
     reg("build/osd", [n](benchmark::State& s) { osd_build(s, n); });
-    reg("build/limn", [n](benchmark::State& s) { limn_build(s, n); });
+    reg("build/limn", [n](benchmark::State& s) { limn_build(s, n, 2); });
+    reg("build/limn_1t", [n](benchmark::State& s) { limn_build(s, n, 1); });
     reg("build/limn_flat", [n](benchmark::State& s) { limn_build_flat(s, n); });
     reg("apply/limn_flat_1t", [n](benchmark::State& s) { limn_apply_flat(s, n, 1); });
     reg("apply/limn_flat_2t", [n](benchmark::State& s) { limn_apply_flat(s, n, 2); });
@@ -219,13 +307,27 @@ int main(int argc, char** argv) {
     reg("apply/limn_1t", [n](benchmark::State& s) { limn_apply(s, n, 1); });
     reg("apply/limn_2t", [n](benchmark::State& s) { limn_apply(s, n, 2); });
   }
+  for (const std::string& n : names) {
+    const int max_depth = n == "terrain800k" ? 3 : 6;
+    for (const char* who : {"osd", "limn"}) {
+      auto fn = [n, who](benchmark::State& s) {
+        std::string(who) == "osd" ? osd_sparse(s, n) : limn_sparse(s, n);
+      };
+      benchmark::RegisterBenchmark((n + "/sparse/" + who).c_str(), fn)
+          ->DenseRange(2, max_depth, 2)
+          ->Unit(benchmark::kMillisecond);
+    }
+  }
   benchmark::RegisterBenchmark("stream_copy", stream_copy)->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("stream_copy_2t", stream_copy_2t)->Unit(benchmark::kMillisecond);
 
   benchmark::Initialize(&argc, argv);
   Recorder rec;
   benchmark::RunSpecifiedBenchmarks(&rec);
   benchmark::Shutdown();
 
+  const double bw1 = rec.bps.count("stream_copy") ? rec.bps["stream_copy"] : 0.0;
+  const double bw2 = rec.bps.count("stream_copy_2t") ? rec.bps["stream_copy_2t"] : 0.0;
   fmt::print("\nRatios (OpenSubdiv time / limn time; > 1 means limn is faster)\n");
   for (const std::string& n : names)
     for (int l = 1; l <= 3; ++l) {
@@ -234,21 +336,37 @@ int main(int argc, char** argv) {
         auto it = rec.ms.find(n + "/" + k + sfx);
         return it == rec.ms.end() ? -1.0 : it->second;
       };
-      const double ob = get("build/osd"), lb = get("build/limn"), oa = get("apply/osd_1t"),
-                   l1 = get("apply/limn_1t"), l2 = get("apply/limn_2t"),
+      auto bw = [&](const std::string& k) {
+        auto it = rec.bps.find(n + "/" + k + sfx);
+        return it == rec.bps.end() ? 0.0 : it->second;
+      };
+      const double ob = get("build/osd"), lb = get("build/limn"), lb1 = get("build/limn_1t"),
+                   oa = get("apply/osd_1t"), l1 = get("apply/limn_1t"), l2 = get("apply/limn_2t"),
                    lbf = get("build/limn_flat"), f1 = get("apply/limn_flat_1t"),
                    f2 = get("apply/limn_flat_2t");
       if (ob < 0 || lb < 0) continue;
       fmt::print(
-          "{:<12} L{}  build {:7.2f} / {:7.2f} ms = {:5.2f}x   apply 1t {:6.2f} / {:6.2f} ms "
-          "= {:5.2f}x   2t {:5.2f}x\n",
-          n, l, ob, lb, ob / lb, oa, l1, oa / l1, oa / l2);
+          "{:<12} L{}  build {:8.2f} / {:7.2f} ms = {:5.2f}x (1 thread {:5.2f}x)   apply 1t "
+          "{:6.2f} / {:6.2f} ms = {:5.2f}x   2t {:5.2f}x   bandwidth 1t {:3.0f}% 2t {:3.0f}%\n",
+          n, l, ob, lb, ob / lb, ob / lb1, oa, l1, oa / l1, oa / l2,
+          bw1 > 0 ? 100 * bw("apply/limn_1t") / bw1 : 0.0,
+          bw2 > 0 ? 100 * bw("apply/limn_2t") / bw2 : 0.0);
       fmt::print(
           "{:<12} L{}  flat: build {:7.2f} ms = {:5.2f}x   apply 1t {:6.2f} ms = {:5.2f}x   "
           "2t {:5.2f}x\n",
           n, l, lbf, ob / lbf, f1, oa / f1, oa / f2);
     }
-  if (rec.bps.count("stream_copy"))
-    fmt::print("memory bandwidth (STREAM-style copy): {:.1f} GB/s\n", rec.bps["stream_copy"] / 1e9);
+  for (const std::string& n : names)
+    for (int d = 2; d <= 6; d += 2) {
+      const std::string o = n + "/sparse/osd/" + std::to_string(d),
+                        l = n + "/sparse/limn/" + std::to_string(d);
+      if (!rec.ms.count(o) || !rec.ms.count(l)) continue;
+      fmt::print(
+          "{:<12} sparse depth {}  OpenSubdiv RefineAdaptive+stencils {:8.2f} ms, limn "
+          "refine_sparse {:7.2f} ms = {:5.2f}x\n",
+          n, d, rec.ms[o], rec.ms[l], rec.ms[o] / rec.ms[l]);
+    }
+  fmt::print("memory bandwidth (STREAM-style copy): {:.1f} GB/s one thread, {:.1f} GB/s two\n",
+             bw1 / 1e9, bw2 / 1e9);
   return 0;
 }
