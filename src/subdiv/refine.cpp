@@ -669,12 +669,21 @@ void for_stencil_chunks(const SubdivOptions& o, const RefinedLevel& P, const Adj
   tbb::parallel_for(size_t(0), chunks, run);
 }
 
-// All the child points' stencils as one table, in two passes (sizes, then entries in place):
-// computing each stencil twice costs less than holding the table twice.
+// All the child points' stencils as one table. Large levels take two parallel passes (sizes,
+// then entries in place): computing each stencil twice costs less than holding (and first
+// touching) the table twice.
 StencilTable build_stencils(const SubdivOptions& o, const RefinedLevel& P, const Adj& a,
                             const Selection& sel) {
   const size_t n = sel.points();
   StencilTable out;
+  if (n < 4 * kStencilChunk) {  // small: one serial pass, appending
+    out.offsets.reserve(n + 1);
+    out.indices.reserve(8 * n);
+    out.weights.reserve(8 * n);
+    Rules rules(o, P, a, sel);
+    for (size_t i = 0; i < n; ++i) rules.point(i, out);
+    return out;
+  }
   fill_n_huge(out.offsets, n + 1, 0u);
   std::vector<uint32_t> sizes;
   fill_n_huge(sizes, n, 0u);
