@@ -846,7 +846,8 @@ __attribute__((target("avx2,fma"))) void apply3_avx2(const uint32_t* off, const 
     const __m256d acc = _mm256_add_pd(a0, a1);
     const __m128 r = _mm256_cvtpd_ps(acc);
     float* o = out + 3 * i;
-    _mm_store_sd(reinterpret_cast<double*>(o), _mm_castps_pd(r));
+    const double xy = _mm_cvtsd_f64(_mm_castps_pd(r));  // x and y, stored without alignment
+    std::memcpy(o, &xy, sizeof xy);
     o[2] = _mm_cvtss_f32(_mm_movehl_ps(r, r));
   }
 }

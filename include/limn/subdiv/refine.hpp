@@ -57,7 +57,11 @@ struct RefinedLevel {
 };
 
 /// Uniform refinement to `depth` levels: levels[0] describes the cage, levels[k] (k >= 1) the
-/// k-th refinement, and stencils[k-1] computes level k's points from level k-1's.
+/// k-th refinement, and stencils[k-1] computes level k's points from level k-1's. Each table
+/// comes in the paper's three blocks, in child-vertex order: the face-point table (one stencil
+/// per level-(k-1) face), the edge-point table (one per edge), the vertex-point table (one per
+/// vertex); within a block the rules (smooth, crease, corner, blended) are mixed, each stencil
+/// carrying its own weights.
 struct UniformRefinement {
   SubdivOptions options;
   std::vector<RefinedLevel> levels;

@@ -1,0 +1,42 @@
+// libFuzzer target for subdividing hostile cages: any OBJ (with OpenSubdiv tags) that parses must
+// refine uniformly, sparsely and leanly, and give limit stencils, or throw InputError; never
+// crash, never break an internal invariant (std::logic_error escapes and is a finding). The lean
+// path must also reproduce the full refinement's points exactly.
+#include <cstddef>
+#include <cstdint>
+#include <string_view>
+#include <vector>
+
+#include "limn/mesh/io.hpp"
+#include "limn/subdiv/refine.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  const std::string_view in(reinterpret_cast<const char*>(data), size);
+  limn::Mesh m;
+  try {
+    m = limn::read_obj(in, "fuzz.obj");
+  } catch (const limn::InputError&) {
+    return 0;
+  }
+  if (m.corner_count() > 4000 || m.vertex_count() == 0) return 0;  // keep each run fast
+  const limn::SubdivOptions o = limn::subdiv_options(m);
+  try {
+    const limn::UniformRefinement r = limn::refine_uniform(m, 2, o);
+    const std::vector<float> points = r.positions(m, 2);
+    if (limn::subdivide_uniform(m, 2, o).positions != points) __builtin_trap();
+    try {
+      const limn::LimitStencils ls = limn::limit_stencils(r, 2);
+      if (ls.position.size() != points.size() / 3) __builtin_trap();
+    } catch (const limn::InputError&) {
+    }
+    // Depth requests taken from the input bytes: 0-3 per vertex, 0-2 per face.
+    std::vector<uint8_t> vd(m.vertex_count()), fd(m.face_count());
+    for (size_t v = 0; v < vd.size(); ++v) vd[v] = uint8_t(data[(7 * v) % size] % 4);
+    for (size_t f = 0; f < fd.size(); ++f) fd[f] = uint8_t(data[(13 * f + 1) % size] % 3);
+    const limn::SparseRefinement s = limn::refine_sparse(m, vd, fd, o);
+    for (size_t k = 0; k < s.levels.size(); ++k)
+      if (s.positions(m, int(k)).size() != 3 * s.levels[k].level.vertex_count()) __builtin_trap();
+  } catch (const limn::InputError&) {
+  }
+  return 0;
+}
