@@ -87,8 +87,12 @@ LimitStencils limit_stencils(const RefinedLevel& L) {
     bool manifold = true, boundary = false;
     for (uint32_t i = 0; i < nfaces; ++i) {
       const uint32_t c = t.vertex_corners[s0 + i];
-      if (t.corner_twin[c] == kNonManifold || t.corner_twin[t.corner_prev[c]] == kNonManifold)
-        manifold = false;
+      // Shared by more than two faces, or by two that disagree on its direction: no fan.
+      auto torn = [&](uint32_t h) {
+        const uint32_t tw = t.corner_twin[h];
+        return tw == kNonManifold || (tw != kNone && fv[tw] == fv[h]);
+      };
+      if (torn(c) || torn(t.corner_prev[c])) manifold = false;
       if (t.corner_twin[c] == kNone && !boundary) start = c, boundary = true;
     }
     ring_e.clear(), ring_f.clear(), es.clear();
@@ -180,7 +184,16 @@ LimitStencils limit_stencils(const RefinedLevel& L) {
       P.add(ring_e[c0], 1.0 / 6.0), P.add(ring_e[c1], 1.0 / 6.0);
       T1.add(ring_e[c0], 0.5), T1.add(ring_e[c1], -0.5);
       const int interior = c1 - c0 - 1;
-      if (interior == 1) {
+      if (!manifold) {
+        // No rotational order (a non-manifold crease): the across-crease tangent is a
+        // convention, along an edge off the crease, like a corner's.
+        int off = -1;
+        for (int i = 0; i < n_e && off < 0; ++i)
+          if (i != c0 && i != c1) off = i;
+        const uint32_t c = t.vertex_corners[s0];
+        const uint32_t to = off >= 0 ? ring_e[size_t(off)] : fv[t.corner_prev[c]];
+        T2.add(v, -1.0), T2.add(to, 1.0);
+      } else if (interior == 1) {
         T2.add(v, -4.0 / 6.0);
         T2.add(ring_e[c0], -1.0 / 6.0), T2.add(ring_e[c0 + 1], 4.0 / 6.0);
         T2.add(ring_e[c1], -1.0 / 6.0);

@@ -164,8 +164,11 @@ struct Terms {
       table.indices.reserve(2 * (base + n));
       table.weights.reserve(2 * (base + n));
     }
-    table.indices.insert(table.indices.end(), idx.begin(), idx.begin() + std::ptrdiff_t(n));
-    for (size_t i = 0; i < n; ++i) table.weights.push_back(static_cast<float>(w[i]));
+    table.indices.resize(base + n);
+    table.weights.resize(base + n);
+    uint32_t* ti = table.indices.data() + base;
+    float* tw = table.weights.data() + base;
+    for (size_t i = 0; i < n; ++i) ti[i] = idx[i], tw[i] = static_cast<float>(w[i]);
     table.offsets.push_back(static_cast<uint32_t>(base + n));
     n = 0;
   }
@@ -175,12 +178,13 @@ struct Terms {
 // all-quad cages) corners are implicit: corner i of face f is 4f + i.
 struct Adj {
   bool quads = false;
-  std::vector<uint32_t> corner_face;       // per corner; empty on quad levels
-  std::vector<uint32_t> corner_edge;       // per corner: the edge of its outgoing half-edge
-  std::vector<uint32_t> eco{0}, ec;        // edge -> the corners on it (one per face)
-  std::vector<uint32_t> vco{0}, vc;        // vertex -> the corners at it (one per face)
-  std::vector<uint32_t> veo{0}, ve;        // vertex -> its edges
-  std::vector<uint8_t> edge_non_manifold;  // from the corner table only (the cage)
+  std::vector<uint32_t> corner_face;         // per corner; empty on quad levels
+  std::vector<uint32_t> corner_edge;         // per corner: the edge of its outgoing half-edge
+  std::vector<uint32_t> eco{0}, ec;          // edge -> the corners on it (one per face)
+  std::vector<uint32_t> vco{0}, vc;          // vertex -> the corners at it (one per face)
+  std::vector<uint32_t> veo{0}, ve;          // vertex -> its edges
+  std::vector<uint8_t> edge_non_manifold;    // from the corner table only (the cage)
+  std::vector<uint8_t> vertex_non_manifold;  // faces around it are not one fan (the cage)
 
   uint32_t face_of(uint32_t c) const { return quads ? c >> 2 : corner_face[c]; }
   uint32_t edge_face_count(uint32_t e) const { return eco[e + 1] - eco[e]; }
@@ -223,6 +227,24 @@ Adj build_adj(RefinedLevel& L, size_t nv) {
     const uint32_t tw = t.corner_twin[c];
     if (tw == kNonManifold || (tw != kNone && L.face_vertices[tw] == L.face_vertices[c]))
       a.edge_non_manifold[t.corner_edge[c]] = 1;
+  }
+  // A vertex is manifold when walking across its edges from one face visits all of its faces
+  // (starting from a boundary corner, if any): two fans sharing only the vertex are not.
+  a.vertex_non_manifold.assign(nv, 0);
+  for (size_t v = 0; v < nv; ++v) {
+    const uint32_t b = t.vertex_offsets[v], n = t.vertex_offsets[v + 1] - b;
+    if (n == 0) continue;
+    uint32_t start = t.vertex_corners[b];
+    for (uint32_t i = b; i < b + n; ++i)
+      if (t.corner_twin[t.vertex_corners[i]] == kNone) start = t.vertex_corners[i];
+    uint32_t c = start, seen = 0;
+    do {
+      ++seen;
+      const uint32_t tw = t.corner_twin[t.corner_prev[c]];
+      if (tw >= kNonManifold || L.face_vertices[tw] != v) break;  // boundary or torn edge
+      c = tw;
+    } while (c != start && seen <= n);
+    a.vertex_non_manifold[v] = seen != n;
   }
   a.eco.assign(ne + 1, 0);
   for (size_t c = 0; c < nc; ++c) ++a.eco[t.corner_edge[c] + 1];
@@ -407,7 +429,8 @@ void init_cage_level(const Mesh& cage, const SubdivOptions& o, const Adj& adj, R
     const uint32_t nedges = adj.vertex_edge_count(v), nfaces = adj.vertex_face_count(v);
     int nm_edges = 0, boundary = 0;
     count_edges(v, nm_edges, boundary);
-    vertex_nm[v] = nm_edges > 0 || (nfaces != nedges && (nfaces + 1 != nedges || boundary != 2));
+    vertex_nm[v] = nm_edges > 0 || adj.vertex_non_manifold[v] ||
+                   (nfaces != nedges && (nfaces + 1 != nedges || boundary != 2));
   }
   // Boundary interpolation "none": faces at a boundary vertex whose boundary edges are not all
   // explicitly infinitely sharp are excluded, as holes (tested before boundaries are sharpened).
@@ -434,7 +457,9 @@ void init_cage_level(const Mesh& cage, const SubdivOptions& o, const Adj& adj, R
     const uint32_t nedges = adj.vertex_edge_count(v), nfaces = adj.vertex_face_count(v);
     int nm_edges = 0, boundary = 0;
     count_edges(v, nm_edges, boundary);
-    if (nfaces == 1 && nedges == 2) {
+    if (nfaces == 0) {
+      L.vertex_sharpness[v] = kInf;  // on no face: OpenSubdiv makes it an infinitely sharp corner
+    } else if (nfaces == 1 && nedges == 2) {
       if (o.boundary == BoundaryInterpolation::edge_and_corner) L.vertex_sharpness[v] = kInf;
     } else if (vertex_nm[v]) {
       // Sharpened, except on an interior non-manifold crease: two opposing non-manifold edges
@@ -602,6 +627,10 @@ class Rules {
 
   void vertex_point(uint32_t v) {
     const uint32_t k0 = a_.veo[v], n = a_.veo[v + 1] - k0;
+    if (n == 0) {  // on no face: stays where it is (its ring is empty)
+      acc_.add(v, 1.0);
+      return;
+    }
     pe_.resize(n), ce_.resize(n);
     int sharp_edges = 0;
     for (uint32_t k = 0; k < n; ++k) {

@@ -646,5 +646,37 @@ TEST(OsdIrregular, Pillow) {
   expect_matches_or_rejects(m);
 }
 
+TEST(OsdIrregular, UnreferencedVertexAndFlippedFace) {
+  // Found by the subdivision fuzzer: a vertex no face uses, and two triangles sharing an edge in
+  // the same direction. The lone vertex must stay where it is (no NaN from an empty ring).
+  Mesh m;
+  m.add_vertex(0, 0, 0), m.add_vertex(1, 0, 0), m.add_vertex(0, 1, 0), m.add_vertex(0, -1, 0);
+  m.add_vertex(0, 0, 1);
+  m.add_face({0, 1, 2});
+  m.add_face({0, 1, 4});
+  expect_matches_or_rejects(m);
+  const UniformRefinement r = refine_uniform(m, 2, {});
+  for (float x : r.positions(m, 2)) ASSERT_TRUE(std::isfinite(x));
+  EXPECT_EQ(subdivide_uniform(m, 2, {}).positions, r.positions(m, 2));
+}
+
+TEST(OsdIrregular, TangledCubeWithACorner) {
+  // Found by the subdivision fuzzer: faces that disagree on orientation around a corner vertex
+  // make non-manifold creases, whose limit tangents once read past the ring.
+  Mesh m;
+  for (float z : {1.0f, -1.0f})
+    for (float y : {-1.0f, 1.0f})
+      for (float x : {-1.0f, 1.0f}) m.add_vertex(x, z > 0 ? y : -y, z);
+  m.add_face({0, 1, 3, 2});
+  m.add_face({0, 3, 5, 4});
+  m.add_face({4, 5, 7, 6});
+  m.add_face({6, 7, 1, 0});
+  m.add_face({0, 7, 5, 3});
+  m.add_face({6, 0, 2, 4});
+  m.corner_vertices = {1};
+  m.corner_sharpness = {1.5f};
+  expect_matches_or_rejects(m);
+}
+
 }  // namespace
 }  // namespace limn
