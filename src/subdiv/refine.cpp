@@ -493,6 +493,29 @@ struct Selection {
   }
 };
 
+// Sharpness in the child of parent edge e's half at its end v (Chaikin needs v's other edges;
+// pe and ce are scratch).
+float half_sharpness_at(const SubdivOptions& o, const RefinedLevel& P, const Adj& pa, size_t e,
+                        uint32_t v, std::vector<float>& pe, std::vector<float>& ce) {
+  const float s = P.edge_sharpness[e];
+  if (!sharp(s) || o.crease_method != CreaseMethod::chaikin) return decrement(s);
+  const uint32_t k0 = pa.veo[v], n = pa.veo[v + 1] - k0;
+  pe.resize(n), ce.resize(n);
+  uint32_t self = 0;
+  for (uint32_t k = 0; k < n; ++k) {
+    pe[k] = P.edge_sharpness[pa.ve[k0 + k]];
+    if (pa.ve[k0 + k] == e) self = k;
+  }
+  child_edge_sharpness(o, pe.data(), int(n), ce.data());
+  return ce[self];
+}
+
+// The same for half j (at end edge_vertices[2e+j]).
+float half_sharpness(const SubdivOptions& o, const RefinedLevel& P, const Adj& pa, size_t e,
+                     uint32_t j, std::vector<float>& pe, std::vector<float>& ce) {
+  return half_sharpness_at(o, P, pa, e, P.edge_vertices[2 * e + j], pe, ce);
+}
+
 // The stencil of every child point, from the rules. One instance per thread: it owns scratch.
 class Rules {
  public:
@@ -557,19 +580,8 @@ class Rules {
       face_point(a_.face_of(a_.ec[k0 + i]), fw * (1.0 - blend), acc_);
   }
 
-  // Sharpness of edge e's child half at end v (Chaikin needs v's other edges).
   float child_half_sharpness(uint32_t e, uint32_t v) {
-    const float s = P_.edge_sharpness[e];
-    if (o_.crease_method != CreaseMethod::chaikin) return decrement(s);
-    const uint32_t k0 = a_.veo[v], n = a_.veo[v + 1] - k0;
-    pe_.resize(n), ce_.resize(n);
-    uint32_t self = 0;
-    for (uint32_t k = 0; k < n; ++k) {
-      pe_[k] = P_.edge_sharpness[a_.ve[k0 + k]];
-      if (a_.ve[k0 + k] == e) self = k;
-    }
-    child_edge_sharpness(o_, pe_.data(), int(n), ce_.data());
-    return ce_[self];
+    return half_sharpness_at(o_, P_, a_, e, v, pe_, ce_);
   }
 
   void edge_point(uint32_t e) {
@@ -748,22 +760,6 @@ void child_vertex_sharpness(const RefinedLevel& P, const Selection& sel, Refined
     for (size_t i = b; i < e; ++i)
       C.vertex_sharpness[base + i] = decrement(P.vertex_sharpness[sel.vertex(uint32_t(i))]);
   });
-}
-
-// Sharpness of half j (at end edge_vertices[2e+j]) of parent edge e in the child.
-float half_sharpness(const SubdivOptions& o, const RefinedLevel& P, const Adj& pa, size_t e,
-                     uint32_t j, std::vector<float>& pe, std::vector<float>& ce) {
-  const float s = P.edge_sharpness[e];
-  if (!sharp(s) || o.crease_method != CreaseMethod::chaikin) return decrement(s);
-  const uint32_t v = P.edge_vertices[2 * e + j], k0 = pa.veo[v], n = pa.veo[v + 1] - k0;
-  pe.resize(n), ce.resize(n);
-  uint32_t self = 0;
-  for (uint32_t k = 0; k < n; ++k) {
-    pe[k] = P.edge_sharpness[pa.ve[k0 + k]];
-    if (pa.ve[k0 + k] == e) self = k;
-  }
-  child_edge_sharpness(o, pe.data(), int(n), ce.data());
-  return ce[self];
 }
 
 // Child edge sharpness on a derived (uniform) child: only the halves of parent edges can be

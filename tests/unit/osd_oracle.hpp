@@ -3,7 +3,9 @@
 // Only the tests include this, so limn itself never depends on OpenSubdiv.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
+#include <filesystem>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -26,6 +28,20 @@
 #include "limn/subdiv/refine.hpp"
 
 namespace limn::test {
+
+/// The OpenSubdiv regression cages and the FAS quad cages of the shared models folder
+/// (`models_dir`/osd and /quads), sorted; empty when the folder is missing.
+inline std::vector<std::filesystem::path> shared_cages(const std::filesystem::path& models_dir) {
+  std::vector<std::filesystem::path> out;
+  for (const char* sub : {"osd", "quads"}) {
+    const std::filesystem::path dir = models_dir / sub;
+    if (!std::filesystem::is_directory(dir)) continue;
+    for (const auto& e : std::filesystem::directory_iterator(dir))
+      if (e.path().extension() == ".obj") out.push_back(e.path());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
 
 namespace osd = OpenSubdiv::OPENSUBDIV_VERSION;
 

@@ -456,15 +456,7 @@ void PrintTo(const ModelCase& c, std::ostream* os) {
 }
 
 std::vector<fs::path> osd_models() {
-  std::vector<fs::path> out;
-  for (const char* sub : {"osd", "quads"}) {
-    const fs::path dir = fs::path(LIMN_SHARED_MODELS) / sub;
-    if (!fs::is_directory(dir)) continue;
-    for (const auto& e : fs::directory_iterator(dir))
-      if (e.path().extension() == ".obj") out.push_back(e.path());
-  }
-  std::sort(out.begin(), out.end());
-  return out;
+  return test::shared_cages(LIMN_SHARED_MODELS);
 }
 
 std::vector<ModelCase> model_cases() {

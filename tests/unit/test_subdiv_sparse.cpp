@@ -230,15 +230,7 @@ Requests pick_requests(const Mesh& cage, uint64_t seed, int max_depth) {
 }
 
 std::vector<fs::path> shared_cages() {
-  std::vector<fs::path> out;
-  for (const char* sub : {"osd", "quads"}) {
-    const fs::path dir = fs::path(LIMN_SHARED_MODELS) / sub;
-    if (!fs::is_directory(dir)) continue;
-    for (const auto& e : fs::directory_iterator(dir))
-      if (e.path().extension() == ".obj") out.push_back(e.path());
-  }
-  std::sort(out.begin(), out.end());
-  return out;
+  return test::shared_cages(LIMN_SHARED_MODELS);
 }
 
 class SparseModel : public ::testing::TestWithParam<fs::path> {};
