@@ -279,9 +279,11 @@ class Recorder : public benchmark::ConsoleReporter {
   void ReportRuns(const std::vector<Run>& runs) override {
     ConsoleReporter::ReportRuns(runs);
     for (const Run& r : runs) {
-      ms[r.benchmark_name()] = r.GetAdjustedRealTime();
-      if (r.counters.count("bytes_per_second"))
-        bps[r.benchmark_name()] = r.counters.at("bytes_per_second");
+      // With --benchmark_repetitions the ratios use the medians.
+      if (r.run_type == Run::RT_Aggregate && r.aggregate_name != "median") continue;
+      const std::string name = r.run_name.str();
+      ms[name] = r.GetAdjustedRealTime();
+      if (r.counters.count("bytes_per_second")) bps[name] = r.counters.at("bytes_per_second");
     }
   }
   std::map<std::string, double> ms, bps;
