@@ -213,63 +213,103 @@ struct LevelRef {
   uint32_t face_size(uint32_t f) const { return L.face_offsets[f + 1] - L.face_offsets[f]; }
 };
 
-// Adjacency from the corner table; sets the level's edge list (build_topology's numbering).
+// Adjacency straight from the faces, without a corner table: corners are sorted by vertex, then
+// each vertex groups the half-edges between it and its higher-numbered neighbours into edges, so
+// edges are numbered by their lower end. Sets the level's edge list.
 Adj build_adj(RefinedLevel& L, size_t nv) {
-  Topology t = build_topology(nv, L.face_offsets, L.face_vertices);
+  const size_t nf = L.face_count(), nc = L.face_vertices.size();
+  const uint32_t* fv = L.face_vertices.data();
   Adj a;
-  const size_t nf = L.face_count(), nc = L.face_vertices.size(), ne = t.edge_count();
   a.quads = true;
   for (size_t f = 0; f < nf && a.quads; ++f) a.quads = L.face_offsets[f + 1] == 4 * (f + 1);
-  // More than two faces, or two faces that disagree on orientation: OpenSubdiv cannot order
-  // faces around such an edge and treats it as non-manifold (infinitely sharp).
-  a.edge_non_manifold.assign(ne, 0);
-  for (size_t c = 0; c < nc; ++c) {
-    const uint32_t tw = t.corner_twin[c];
-    if (tw == kNonManifold || (tw != kNone && L.face_vertices[tw] == L.face_vertices[c]))
-      a.edge_non_manifold[t.corner_edge[c]] = 1;
+  if (!a.quads) {
+    a.corner_face.resize(nc);
+    for (size_t f = 0; f < nf; ++f)
+      for (uint32_t c = L.face_offsets[f]; c < L.face_offsets[f + 1]; ++c)
+        a.corner_face[c] = uint32_t(f);
   }
+  const LevelRef lr{L, a};
+  a.vco.assign(nv + 1, 0);
+  for (size_t c = 0; c < nc; ++c) ++a.vco[fv[c] + 1];
+  for (size_t v = 0; v < nv; ++v) a.vco[v + 1] += a.vco[v];
+  a.vc.resize(nc);
+  {
+    std::vector<uint32_t> fill(a.vco.begin(), a.vco.end() - 1);
+    for (size_t c = 0; c < nc; ++c) a.vc[fill[fv[c]]++] = uint32_t(c);
+  }
+  // Half-edge h runs from fv[h] to fv[next(h)]. Around v: its outgoing half-edges, and the
+  // incoming ones (the corner before each of v's corners).
+  a.corner_edge.assign(nc, kNone);
+  std::vector<uint32_t> twin(nc, kNone);
+  a.ec.clear();
+  a.ec.reserve(nc);
+  a.eco.assign(1, 0);
+  a.eco.reserve(nc / 2 + 2);
+  L.edge_vertices.clear();
+  L.edge_vertices.reserve(nc + 4);
+  a.edge_non_manifold.clear();
+  std::vector<std::pair<uint32_t, uint32_t>> cand;  // (other end, half-edge)
+  for (uint32_t v = 0; v < nv; ++v) {
+    cand.clear();
+    for (uint32_t i = a.vco[v]; i < a.vco[v + 1]; ++i) {
+      const uint32_t c = a.vc[i], p = lr.prev(c);
+      if (const uint32_t b = fv[lr.next(c)]; b > v) cand.emplace_back(b, c);
+      if (const uint32_t u = fv[p]; u > v) cand.emplace_back(u, p);
+    }
+    for (size_t i = 1; i < cand.size(); ++i)  // a handful of entries: insertion sort
+      for (size_t j = i; j > 0 && cand[j] < cand[j - 1]; --j) std::swap(cand[j], cand[j - 1]);
+    for (size_t i = 0; i < cand.size();) {
+      size_t j = i;
+      while (j < cand.size() && cand[j].first == cand[i].first) ++j;
+      const uint32_t e = uint32_t(a.eco.size() - 1);
+      L.edge_vertices.insert(L.edge_vertices.end(), {v, cand[i].first});
+      for (size_t k = i; k < j; ++k)
+        a.corner_edge[cand[k].second] = e, a.ec.push_back(cand[k].second);
+      a.eco.push_back(uint32_t(a.ec.size()));
+      // More than two faces, or two that disagree on its direction: OpenSubdiv cannot order
+      // faces around such an edge and treats it as non-manifold (infinitely sharp).
+      const uint32_t h0 = cand[i].second, h1 = j - i == 2 ? cand[i + 1].second : kNone;
+      const bool opposite = h1 != kNone && fv[h0] != fv[h1];
+      a.edge_non_manifold.push_back(j - i > 2 || (j - i == 2 && !opposite));
+      if (opposite) {
+        twin[h0] = h1, twin[h1] = h0;
+      } else if (j - i >= 2) {
+        for (size_t k = i; k < j; ++k) twin[cand[k].second] = kNonManifold;
+      }
+      i = j;
+    }
+  }
+  const size_t ne = a.eco.size() - 1;
   // A vertex is manifold when walking across its edges from one face visits all of its faces
   // (starting from a boundary corner, if any): two fans sharing only the vertex are not.
   a.vertex_non_manifold.assign(nv, 0);
   for (size_t v = 0; v < nv; ++v) {
-    const uint32_t b = t.vertex_offsets[v], n = t.vertex_offsets[v + 1] - b;
+    const uint32_t b = a.vco[v], n = a.vco[v + 1] - b;
     if (n == 0) continue;
-    uint32_t start = t.vertex_corners[b];
+    uint32_t start = a.vc[b];
     for (uint32_t i = b; i < b + n; ++i)
-      if (t.corner_twin[t.vertex_corners[i]] == kNone) start = t.vertex_corners[i];
+      if (twin[a.vc[i]] == kNone) start = a.vc[i];
     uint32_t c = start, seen = 0;
     do {
       ++seen;
-      const uint32_t tw = t.corner_twin[t.corner_prev[c]];
-      if (tw >= kNonManifold || L.face_vertices[tw] != v) break;  // boundary or torn edge
+      const uint32_t tw = twin[lr.prev(c)];
+      if (tw >= kNonManifold || fv[tw] != v) break;  // boundary or torn edge
       c = tw;
     } while (c != start && seen <= n);
     a.vertex_non_manifold[v] = seen != n;
   }
-  a.eco.assign(ne + 1, 0);
-  for (size_t c = 0; c < nc; ++c) ++a.eco[t.corner_edge[c] + 1];
-  for (size_t e = 0; e < ne; ++e) a.eco[e + 1] += a.eco[e];
-  a.ec.resize(nc);
-  std::vector<uint32_t> fill(a.eco.begin(), a.eco.end() - 1);
-  for (size_t c = 0; c < nc; ++c) a.ec[fill[t.corner_edge[c]]++] = static_cast<uint32_t>(c);
-
   a.veo.assign(nv + 1, 0);
   for (size_t e = 0; e < ne; ++e) {
-    ++a.veo[t.edge_vertices[2 * e] + 1];
-    ++a.veo[t.edge_vertices[2 * e + 1] + 1];
+    ++a.veo[L.edge_vertices[2 * e] + 1];
+    ++a.veo[L.edge_vertices[2 * e + 1] + 1];
   }
   for (size_t v = 0; v < nv; ++v) a.veo[v + 1] += a.veo[v];
   a.ve.resize(2 * ne);
-  fill.assign(a.veo.begin(), a.veo.end() - 1);
+  std::vector<uint32_t> fill(a.veo.begin(), a.veo.end() - 1);
   for (size_t e = 0; e < ne; ++e) {
-    a.ve[fill[t.edge_vertices[2 * e]]++] = static_cast<uint32_t>(e);
-    a.ve[fill[t.edge_vertices[2 * e + 1]]++] = static_cast<uint32_t>(e);
+    a.ve[fill[L.edge_vertices[2 * e]]++] = uint32_t(e);
+    a.ve[fill[L.edge_vertices[2 * e + 1]]++] = uint32_t(e);
   }
-  if (!a.quads) a.corner_face = std::move(t.corner_face);
-  a.corner_edge = std::move(t.corner_edge);
-  a.vco = std::move(t.vertex_offsets);
-  a.vc = std::move(t.vertex_corners);
-  L.edge_vertices = std::move(t.edge_vertices);
   return a;
 }
 
