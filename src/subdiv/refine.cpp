@@ -61,7 +61,7 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
 // Sizes a vector to n elements of `value`, dropping any old buffer first so a level's arrays
 // never hold two copies at once.
 template <class T>
-void fill_n_huge(std::vector<T>& v, size_t n, T value = T()) {
+void refill(std::vector<T>& v, size_t n, T value = T()) {
   if (v.capacity() < n) std::vector<T>().swap(v);
   v.assign(n, value);
 }
@@ -326,13 +326,13 @@ void derive_child(const RefinedLevel& P, const Adj& pa, RefinedLevel& C, bool ed
   constexpr size_t kGrain = 1 << 13;
   auto half = [&](uint32_t e, uint32_t v) { return NC + 2 * e + (ev[2 * size_t(e)] == v ? 0 : 1); };
 
-  fill_n_huge(C.face_offsets, size_t(NC) + 1);
-  fill_n_huge(C.face_vertices, 4 * size_t(NC));
-  fill_n_huge(C.face_hole, NC);
+  refill(C.face_offsets, size_t(NC) + 1);
+  refill(C.face_vertices, 4 * size_t(NC));
+  refill(C.face_hole, NC);
   if (ca) {
     ca->quads = true;
     ca->corner_face.clear();
-    fill_n_huge(ca->corner_edge, 4 * size_t(NC));
+    refill(ca->corner_edge, 4 * size_t(NC));
   }
   parallel_range(F, kGrain, [&](size_t b, size_t e) {
     for (size_t f = b; f < e; ++f) {
@@ -353,14 +353,14 @@ void derive_child(const RefinedLevel& P, const Adj& pa, RefinedLevel& C, bool ed
   if (!ca && !edges) return;
 
   const size_t NE = size_t(NC) + 2 * size_t(E);
-  fill_n_huge(C.edge_vertices, 2 * NE);
+  refill(C.edge_vertices, 2 * NE);
   if (ca) {
-    fill_n_huge(ca->eco, NE + 1);
-    fill_n_huge(ca->ec, 4 * size_t(NC));
-    fill_n_huge(ca->vco, size_t(F) + E + V + 1);
-    fill_n_huge(ca->vc, 4 * size_t(NC));
-    fill_n_huge(ca->veo, size_t(F) + E + V + 1);
-    fill_n_huge(ca->ve, 2 * NE);
+    refill(ca->eco, NE + 1);
+    refill(ca->ec, 4 * size_t(NC));
+    refill(ca->vco, size_t(F) + E + V + 1);
+    refill(ca->vc, 4 * size_t(NC));
+    refill(ca->veo, size_t(F) + E + V + 1);
+    refill(ca->ve, 2 * NE);
     ca->edge_non_manifold.clear();
   }
   // Per parent face: the interior edges (one per corner) and the face point's rings.
@@ -765,9 +765,9 @@ StencilTable build_stencils(const SubdivOptions& o, const RefinedLevel& P, const
     for (size_t i = 0; i < n; ++i) rules.point(i, out);
     return out;
   }
-  fill_n_huge(out.offsets, n + 1, 0u);
+  refill(out.offsets, n + 1, 0u);
   std::vector<uint32_t> sizes;
-  fill_n_huge(sizes, n, 0u);
+  refill(sizes, n, 0u);
   parallel_range(n, kStencilChunk, [&](size_t b, size_t e) {
     Rules rules(o, P, a, sel);
     for (size_t i = b; i < e; ++i) sizes[i] = uint32_t(rules.compute(i));
@@ -780,8 +780,8 @@ StencilTable build_stencils(const SubdivOptions& o, const RefinedLevel& P, const
     out.offsets[i + 1] = uint32_t(total);
   }
   std::vector<uint32_t>().swap(sizes);
-  fill_n_huge(out.indices, total, 0u);
-  fill_n_huge(out.weights, total, 0.0f);
+  refill(out.indices, total, 0u);
+  refill(out.weights, total, 0.0f);
   parallel_range(n, kStencilChunk, [&](size_t b, size_t e) {
     Rules rules(o, P, a, sel);
     for (size_t i = b; i < e; ++i) {
@@ -794,7 +794,7 @@ StencilTable build_stencils(const SubdivOptions& o, const RefinedLevel& P, const
 
 // Child vertex sharpness: vertex points inherit their parent's, decayed.
 void child_vertex_sharpness(const RefinedLevel& P, const Selection& sel, RefinedLevel& C) {
-  fill_n_huge(C.vertex_sharpness, sel.points(), 0.0f);
+  refill(C.vertex_sharpness, sel.points(), 0.0f);
   const size_t base = size_t(sel.nf) + sel.ne;
   parallel_range(sel.nv, 1 << 16, [&](size_t b, size_t e) {
     for (size_t i = b; i < e; ++i)
@@ -807,7 +807,7 @@ void child_vertex_sharpness(const RefinedLevel& P, const Selection& sel, Refined
 void derived_edge_sharpness(const SubdivOptions& o, const RefinedLevel& P, const Adj& pa,
                             RefinedLevel& C) {
   const size_t NC = P.face_vertices.size(), E = P.edge_count();
-  fill_n_huge(C.edge_sharpness, NC + 2 * E, 0.0f);
+  refill(C.edge_sharpness, NC + 2 * E, 0.0f);
   parallel_range(E, 1 << 16, [&](size_t b, size_t end) {
     std::vector<float> pe, ce;
     for (size_t e = b; e < end; ++e)
@@ -1019,9 +1019,9 @@ StencilTable compose_stencils(const StencilTable& outer, const StencilTable& inn
     s.touched.resize(kept);
   };
   StencilTable out;
-  fill_n_huge(out.offsets, n + 1, 0u);
+  refill(out.offsets, n + 1, 0u);
   std::vector<uint32_t> sizes;
-  fill_n_huge(sizes, n, 0u);
+  refill(sizes, n, 0u);
   parallel_range(n, 4096, [&](size_t b, size_t e) {
     Scratch& s = scratch.local();
     for (size_t p = b; p < e; ++p) {
@@ -1037,8 +1037,8 @@ StencilTable compose_stencils(const StencilTable& outer, const StencilTable& inn
     out.offsets[p + 1] = uint32_t(total);
   }
   std::vector<uint32_t>().swap(sizes);
-  fill_n_huge(out.indices, total, 0u);
-  fill_n_huge(out.weights, total, 0.0f);
+  refill(out.indices, total, 0u);
+  refill(out.weights, total, 0.0f);
   parallel_range(n, 4096, [&](size_t b, size_t e) {
     Scratch& s = scratch.local();
     for (size_t p = b; p < e; ++p) {
@@ -1055,18 +1055,30 @@ StencilTable compose_stencils(const StencilTable& outer, const StencilTable& inn
   return out;
 }
 
-StencilTable cage_stencils(const UniformRefinement& r, int level) {
-  if (level < 1 || level > int(r.stencils.size()))
+namespace {
+
+StencilTable compose_chain(const std::vector<StencilTable>& tables, int level) {
+  if (level < 1 || level > int(tables.size()))
     throw InputError(fmt::format("cage_stencils: level {} not refined", level));
-  StencilTable flat = r.stencils[0];
-  for (int k = 1; k < level; ++k) flat = compose_stencils(r.stencils[size_t(k)], flat);
+  StencilTable flat = tables[0];
+  for (int k = 1; k < level; ++k) flat = compose_stencils(tables[size_t(k)], flat);
   return flat;
+}
+
+}  // namespace
+
+StencilTable cage_stencils(const UniformRefinement& r, int level) {
+  return compose_chain(r.stencils, level);
+}
+
+StencilTable cage_stencils(const SparseRefinement& r, int level) {
+  return compose_chain(r.stencils, level);
 }
 
 std::vector<float> UniformRefinement::positions(const Mesh& cage, int level) const {
   std::vector<float> cur = cage.positions, next;
   for (int k = 0; k < level; ++k) {
-    fill_n_huge(next, 3 * stencils[size_t(k)].size(), 0.0f);
+    refill(next, 3 * stencils[size_t(k)].size(), 0.0f);
     apply_stencils(stencils[size_t(k)], cur.data(), next.data(), 3);
     cur.swap(next);
   }
@@ -1124,7 +1136,7 @@ Mesh subdivide_uniform(const Mesh& cage, int depth, const SubdivOptions& options
     const Selection all = Selection::everything(P);
     t0 = clock::now();
     // Stencils are built chunk by chunk, applied at once and dropped: never stored whole.
-    fill_n_huge(next, 3 * all.points(), 0.0f);
+    refill(next, 3 * all.points(), 0.0f);
     std::vector<size_t> entries((all.points() + kStencilChunk - 1) / kStencilChunk, 0);
     for_stencil_chunks(options, P, pa, all, kStencilChunk, [&](size_t b, StencilTable& t) {
       apply_serial(t, 0, t.size(), pos.data(), next.data() + 3 * b, 3);
@@ -1198,7 +1210,7 @@ std::vector<float> SparseRefinement::positions(const Mesh& cage, int level) cons
     throw InputError(fmt::format("sparse refinement: level {} not refined", level));
   std::vector<float> cur = cage.positions, next;
   for (int k = 0; k < level; ++k) {
-    fill_n_huge(next, 3 * stencils[size_t(k)].size(), 0.0f);
+    refill(next, 3 * stencils[size_t(k)].size(), 0.0f);
     apply_stencils(stencils[size_t(k)], cur.data(), next.data(), 3);
     cur.swap(next);
   }

@@ -373,6 +373,24 @@ TEST(Sparse, WorkIsLinearInDepthNotExponential) {
     EXPECT_NEAR(deep[c], cage_limit[c], 1e-5 * bounding_box(cage).diagonal());
 }
 
+TEST(Sparse, CageStencilsMatchLevelByLevel) {
+  // The flattened tables turn the cage straight into each sparse level's points.
+  const Mesh cage = test::random_cage(3);
+  const Requests req = pick_requests(cage, 3, 4);
+  const SparseRefinement sr = refine_sparse(cage, req.vertex, req.face, subdiv_options(cage));
+  const float tol = 1e-6f * bounding_box(cage).diagonal();
+  for (int k = 1; k < int(sr.levels.size()); ++k) {
+    const StencilTable flat = cage_stencils(sr, k);
+    const std::vector<float> chained = sr.positions(cage, k);
+    ASSERT_EQ(3 * flat.size(), chained.size()) << "level " << k;
+    std::vector<float> direct(chained.size());
+    apply_stencils(flat, cage.positions.data(), direct.data(), 3);
+    for (size_t i = 0; i < direct.size(); ++i)
+      ASSERT_NEAR(direct[i], chained[i], tol) << "level " << k << " value " << i;
+  }
+  EXPECT_THROW(cage_stencils(sr, 0), InputError);
+}
+
 TEST(Sparse, BadRequestsAreInputErrors) {
   const Mesh cube = make_shape("cube");
   const std::vector<uint8_t> short_list(3, 1), too_deep(cube.vertex_count(), 17);

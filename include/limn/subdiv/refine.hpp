@@ -80,6 +80,10 @@ StencilTable compose_stencils(const StencilTable& outer, const StencilTable& inn
 /// intermediate levels.
 StencilTable cage_stencils(const UniformRefinement& r, int level);
 
+struct SparseRefinement;
+/// The same for a sparse refinement: cage to the local points of sparse level `level`.
+StencilTable cage_stencils(const SparseRefinement& r, int level);
+
 /// Limit stencils over the points of one refinement level: position, and the two tangents whose
 /// cross product is the (outward, for counter-clockwise faces) normal. Smooth, dart, crease and
 /// corner masks as OpenSubdiv's Catmull-Clark limit masks (Far::PrimvarRefiner::Limit), using
