@@ -1019,6 +1019,37 @@ StencilTable compose_stencils(const StencilTable& outer, const StencilTable& inn
     s.touched.resize(kept);
   };
   StencilTable out;
+  // Up to a million points: one pass into per-chunk parts, then one copy.
+  if (n < (size_t(1) << 20)) {
+    const size_t chunk = 2048, chunks = (n + chunk - 1) / chunk;
+    std::vector<StencilTable> parts(chunks);
+    parallel_range(chunks, 1, [&](size_t cb, size_t ce) {
+      Scratch& s = scratch.local();
+      for (size_t c = cb; c < ce; ++c) {
+        StencilTable& t = parts[c];
+        for (size_t p = c * chunk; p < std::min(n, (c + 1) * chunk); ++p) {
+          merge(s, p);
+          for (uint32_t src : s.touched) {
+            t.indices.push_back(src);
+            t.weights.push_back(static_cast<float>(s.acc[src]));
+            s.acc[src] = 0.0;
+          }
+          t.offsets.push_back(uint32_t(t.indices.size()));
+        }
+      }
+    });
+    out.offsets.reserve(n + 1);
+    for (const StencilTable& t : parts) {
+      const size_t base = out.indices.size();
+      if (base + t.indices.size() > UINT32_MAX)
+        throw InputError("composed stencils need more than 2^32 entries");
+      for (size_t i = 1; i < t.offsets.size(); ++i)
+        out.offsets.push_back(uint32_t(base + t.offsets[i]));
+      out.indices.insert(out.indices.end(), t.indices.begin(), t.indices.end());
+      out.weights.insert(out.weights.end(), t.weights.begin(), t.weights.end());
+    }
+    return out;
+  }
   refill(out.offsets, n + 1, 0u);
   std::vector<uint32_t> sizes;
   refill(sizes, n, 0u);
