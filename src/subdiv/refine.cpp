@@ -828,22 +828,8 @@ void table_edge_sharpness(const SubdivOptions& o, const RefinedLevel& P, const A
   for (size_t e = 0; e < ne; ++e) {
     const uint32_t a = C.edge_vertices[2 * e], b = C.edge_vertices[2 * e + 1];  // a < b
     if (!(a < F + E && a >= F && b >= F + E)) continue;
-    const uint32_t pedge = sel.edge(a - F), pvert = sel.vertex(b - F - E);
-    const float s = P.edge_sharpness[pedge];
-    if (!sharp(s)) continue;
-    if (o.crease_method != CreaseMethod::chaikin) {
-      C.edge_sharpness[e] = decrement(s);
-      continue;
-    }
-    const uint32_t k0 = pa.veo[pvert], n = pa.veo[pvert + 1] - k0;
-    pe.resize(n), ce.resize(n);
-    uint32_t self = 0;
-    for (uint32_t k = 0; k < n; ++k) {
-      pe[k] = P.edge_sharpness[pa.ve[k0 + k]];
-      if (pa.ve[k0 + k] == pedge) self = k;
-    }
-    child_edge_sharpness(o, pe.data(), int(n), ce.data());
-    C.edge_sharpness[e] = ce[self];
+    C.edge_sharpness[e] =
+        half_sharpness_at(o, P, pa, sel.edge(a - F), sel.vertex(b - F - E), pe, ce);
   }
 }
 
