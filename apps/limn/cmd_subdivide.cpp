@@ -54,7 +54,6 @@ void add_subdivide(CLI::App& app) {
                           {"faces", st.levels[k].faces},
                           {"edges", st.levels[k].edges},
                           {"stencil_entries", st.levels[k].stencil_entries}});
-      sw.lap();
       timings["topology"] = st.topology_ms;
       timings["stencils_and_apply"] = st.stencils_ms;
       timings["output"] = st.output_ms;

@@ -12,11 +12,11 @@
 // the previous level's vertices, so every stencil reads one level only and levels can be applied
 // (or flattened) independently.
 //
-// Topology: the cage's adjacency comes from the corner table (build_topology). A uniformly
-// refined level's adjacency is derived from its parent's in closed form, without any search:
-// child face c is parent corner c, child corner 4c+i, child edges are one per parent corner
-// (face point to edge point) then two per parent edge (edge point to each end's vertex point).
-// Sparse levels are small and use the corner table.
+// Topology: the cage's adjacency is built from its faces (build_adj). A uniformly refined
+// level's adjacency is derived from its parent's in closed form, without any search: child
+// face c is parent corner c, child corner 4c+i, child edges are one per parent corner (face
+// point to edge point) then two per parent edge (edge point to each end's vertex point). Sparse
+// levels are small and are built from their faces like the cage.
 #include "limn/subdiv/refine.hpp"
 
 #include <fmt/format.h>
@@ -183,8 +183,8 @@ struct Adj {
   std::vector<uint32_t> eco{0}, ec;          // edge -> the corners on it (one per face)
   std::vector<uint32_t> vco{0}, vc;          // vertex -> the corners at it (one per face)
   std::vector<uint32_t> veo{0}, ve;          // vertex -> its edges
-  std::vector<uint8_t> edge_non_manifold;    // from the corner table only (the cage)
-  std::vector<uint8_t> vertex_non_manifold;  // faces around it are not one fan (the cage)
+  std::vector<uint8_t> edge_non_manifold;    // from build_adj only (the cage, sparse levels)
+  std::vector<uint8_t> vertex_non_manifold;  // faces around it are not one fan (build_adj)
 
   uint32_t face_of(uint32_t c) const { return quads ? c >> 2 : corner_face[c]; }
   uint32_t edge_face_count(uint32_t e) const { return eco[e + 1] - eco[e]; }
@@ -720,14 +720,15 @@ class Rules {
 
 constexpr size_t kStencilChunk = 1 << 14;
 
-// Calls body(first point, table) for consecutive chunks of `chunk` child points, in parallel;
-// each table holds its chunk's stencils.
+// Calls body(first point, table) for consecutive chunks of kStencilChunk child points, in
+// parallel; each table holds its chunk's stencils and is reused for the thread's next chunk.
 template <class Body>
 void for_stencil_chunks(const SubdivOptions& o, const RefinedLevel& P, const Adj& a,
-                        const Selection& sel, size_t chunk, Body&& body) {
+                        const Selection& sel, Body&& body) {
+  constexpr size_t chunk = kStencilChunk;
   const size_t n = sel.points(), chunks = (n + chunk - 1) / chunk;
-  // Per-thread tables keep their memory from chunk to chunk (unless the body takes it), so
-  // streaming a level through them touches no fresh pages.
+  // Per-thread tables keep their memory from chunk to chunk, so streaming a level through them
+  // touches no fresh pages.
   tbb::enumerable_thread_specific<StencilTable> scratch;
   auto run = [&](size_t c) {
     Rules rules(o, P, a, sel);
@@ -817,7 +818,7 @@ void derived_edge_sharpness(const SubdivOptions& o, const RefinedLevel& P, const
   });
 }
 
-// Child edge sharpness on a child whose edges come from the corner table (sparse levels): an
+// Child edge sharpness on a child whose edges come from build_adj (sparse levels): an
 // edge from an edge point to a vertex point is half of the parent edge.
 void table_edge_sharpness(const SubdivOptions& o, const RefinedLevel& P, const Adj& pa,
                           const Selection& sel, RefinedLevel& C) {
@@ -1092,14 +1093,24 @@ StencilTable cage_stencils(const SparseRefinement& r, int level) {
   return compose_chain(r.stencils, level);
 }
 
-std::vector<float> UniformRefinement::positions(const Mesh& cage, int level) const {
+namespace {
+
+// The cage's positions pushed through the first `level` tables of a chain.
+std::vector<float> apply_chain(const std::vector<StencilTable>& tables, const Mesh& cage,
+                               int level) {
   std::vector<float> cur = cage.positions, next;
   for (int k = 0; k < level; ++k) {
-    refill(next, 3 * stencils[size_t(k)].size(), 0.0f);
-    apply_stencils(stencils[size_t(k)], cur.data(), next.data(), 3);
+    refill(next, 3 * tables[size_t(k)].size(), 0.0f);
+    apply_stencils(tables[size_t(k)], cur.data(), next.data(), 3);
     cur.swap(next);
   }
   return cur;
+}
+
+}  // namespace
+
+std::vector<float> UniformRefinement::positions(const Mesh& cage, int level) const {
+  return apply_chain(stencils, cage, level);
 }
 
 UniformRefinement refine_uniform(const Mesh& cage, int depth, const SubdivOptions& options) {
@@ -1155,7 +1166,7 @@ Mesh subdivide_uniform(const Mesh& cage, int depth, const SubdivOptions& options
     // Stencils are built chunk by chunk, applied at once and dropped: never stored whole.
     refill(next, 3 * all.points(), 0.0f);
     std::vector<size_t> entries((all.points() + kStencilChunk - 1) / kStencilChunk, 0);
-    for_stencil_chunks(options, P, pa, all, kStencilChunk, [&](size_t b, StencilTable& t) {
+    for_stencil_chunks(options, P, pa, all, [&](size_t b, StencilTable& t) {
       apply_serial(t, 0, t.size(), pos.data(), next.data() + 3 * b, 3);
       entries[b / kStencilChunk] = t.indices.size();
     });
@@ -1225,13 +1236,7 @@ Mesh subdivide_uniform(const Mesh& cage, int depth, const SubdivOptions& options
 std::vector<float> SparseRefinement::positions(const Mesh& cage, int level) const {
   if (level < 0 || level >= int(levels.size()))
     throw InputError(fmt::format("sparse refinement: level {} not refined", level));
-  std::vector<float> cur = cage.positions, next;
-  for (int k = 0; k < level; ++k) {
-    refill(next, 3 * stencils[size_t(k)].size(), 0.0f);
-    apply_stencils(stencils[size_t(k)], cur.data(), next.data(), 3);
-    cur.swap(next);
-  }
-  return cur;
+  return apply_chain(stencils, cage, level);
 }
 
 SparseRefinement refine_sparse(const Mesh& cage, std::span<const uint8_t> vertex_depth,
