@@ -1239,9 +1239,15 @@ std::vector<float> SparseRefinement::positions(const Mesh& cage, int level) cons
   return apply_chain(stencils, cage, level);
 }
 
+namespace {
+constexpr int kMaxSparseDepth = 16;
+SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& options,
+                                    const SparseRequest& request, std::vector<uint8_t> vertex_depth,
+                                    std::vector<uint8_t> face_depth);
+}  // namespace
+
 SparseRefinement refine_sparse(const Mesh& cage, std::span<const uint8_t> vertex_depth,
                                std::span<const uint8_t> face_depth, const SubdivOptions& options) {
-  constexpr int kMaxSparseDepth = 16;
   const size_t nv0 = cage.vertex_count(), nf0 = cage.face_count();
   if (!vertex_depth.empty() && vertex_depth.size() != nv0)
     throw InputError(fmt::format("sparse refinement: {} vertex depths for {} vertices",
@@ -1256,6 +1262,32 @@ SparseRefinement refine_sparse(const Mesh& cage, std::span<const uint8_t> vertex
             fmt::format("sparse refinement: depth {} of element {} out of range (0-{})", d[i], i,
                         kMaxSparseDepth));
 
+  std::vector<uint8_t> vd(nv0, 0), fd(nf0, 0);
+  std::copy(vertex_depth.begin(), vertex_depth.end(), vd.begin());
+  std::copy(face_depth.begin(), face_depth.end(), fd.begin());
+  // A face is requested while it, or one of its vertices, has levels left.
+  auto request = [](size_t, const SparseLevel& P, std::vector<uint8_t>& requested) {
+    const RefinedLevel& PL = P.level;
+    for (size_t f = 0; f < PL.face_count(); ++f) {
+      bool want = P.face_depth[f] > 0;
+      for (uint32_t c = PL.face_offsets[f]; c < PL.face_offsets[f + 1] && !want; ++c)
+        want = P.vertex_depth[PL.face_vertices[c]] > 0;
+      requested[f] = want;
+    }
+  };
+  return refine_sparse_impl(cage, options, request, std::move(vd), std::move(fd));
+}
+
+SparseRefinement refine_sparse(const Mesh& cage, const SubdivOptions& options,
+                               const SparseRequest& request) {
+  return refine_sparse_impl(cage, options, request, std::vector<uint8_t>(cage.vertex_count(), 0),
+                            std::vector<uint8_t>(cage.face_count(), 0));
+}
+
+namespace {
+SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& options,
+                                    const SparseRequest& request, std::vector<uint8_t> vertex_depth,
+                                    std::vector<uint8_t> face_depth) {
   SparseRefinement r;
   r.options = options;
   r.levels.reserve(kMaxSparseDepth + 1);
@@ -1263,13 +1295,12 @@ SparseRefinement refine_sparse(const Mesh& cage, std::span<const uint8_t> vertex
     SparseLevel& L0 = r.levels.emplace_back();
     L0.level.face_offsets = cage.face_offsets;
     L0.level.face_vertices = cage.face_vertices;
-    L0.vertex_complete.assign(nv0, 1);
-    L0.vertex_depth.assign(nv0, 0);
-    L0.face_depth.assign(nf0, 0);
-    std::copy(vertex_depth.begin(), vertex_depth.end(), L0.vertex_depth.begin());
-    std::copy(face_depth.begin(), face_depth.end(), L0.face_depth.begin());
+    L0.vertex_complete.assign(cage.vertex_count(), 1);
+    L0.vertex_depth = std::move(vertex_depth);
+    L0.face_depth = std::move(face_depth);
   }
   auto adj = std::make_unique<Adj>(cage_level(cage, options, r.levels[0].level));
+  std::vector<uint8_t> requested;
 
   for (size_t k = 0;; ++k) {
     SparseLevel& P = r.levels[k];
@@ -1282,19 +1313,18 @@ SparseRefinement refine_sparse(const Mesh& cage, std::span<const uint8_t> vertex
     // that each requested face's child points see whole rings.
     std::vector<uint8_t> near(nv, 0);
     bool any = false;
+    requested.assign(nf, 0);
+    request(k, P, requested);
     for (uint32_t f = 0; f < nf; ++f) {
-      const uint32_t b = PL.face_offsets[f], e = PL.face_offsets[f + 1];
-      bool requested = P.face_depth[f] > 0;
-      for (uint32_t c = b; c < e && !requested; ++c)
-        requested = P.vertex_depth[PL.face_vertices[c]] > 0;
-      if (!requested) continue;
+      if (!requested[f]) continue;
       any = true;
-      for (uint32_t c = b; c < e; ++c) near[PL.face_vertices[c]] = 1;
+      for (uint32_t c = PL.face_offsets[f]; c < PL.face_offsets[f + 1]; ++c)
+        near[PL.face_vertices[c]] = 1;
     }
     P.face_refined.assign(nf, 0);
     if (!any) break;
     if (k == kMaxSparseDepth)
-      throw std::logic_error("sparse refinement: depth requests outlived the depth bound");
+      throw InputError(fmt::format("sparse refinement: requests beyond level {}", kMaxSparseDepth));
     for (uint32_t v = 0; v < nv; ++v)
       if (near[v])
         for (uint32_t i = t.vco[v]; i < t.vco[v + 1]; ++i) P.face_refined[t.face_of(t.vc[i])] = 1;
@@ -1370,5 +1400,7 @@ SparseRefinement refine_sparse(const Mesh& cage, std::span<const uint8_t> vertex
   }
   return r;
 }
+
+}  // namespace
 
 }  // namespace limn

@@ -92,9 +92,10 @@ struct OsdRefinement {
   std::vector<OsdLevel> levels;                        // levels[0] is the cage
 };
 
-/// Refines `cage` uniformly `depth` times with OpenSubdiv. Throws std::runtime_error when
-/// OpenSubdiv rejects the topology.
-inline OsdRefinement osd_refine(const Mesh& cage, int depth, const SubdivOptions& options) {
+/// An unrefined OpenSubdiv refiner for `cage`. Throws std::runtime_error when OpenSubdiv
+/// rejects the topology.
+inline std::unique_ptr<osd::Far::TopologyRefiner> osd_refiner(const Mesh& cage,
+                                                              const SubdivOptions& options) {
   using Index = osd::Far::Index;
   const size_t nf = cage.face_count();
   std::vector<int> verts_per_face(nf);
@@ -120,9 +121,16 @@ inline OsdRefinement osd_refine(const Mesh& cage, int depth, const SubdivOptions
 
   using Factory = osd::Far::TopologyRefinerFactory<osd::Far::TopologyDescriptor>;
   Factory::Options factory_options(osd::Sdc::SCHEME_CATMARK, osd_options(options));
+  std::unique_ptr<osd::Far::TopologyRefiner> refiner(Factory::Create(desc, factory_options));
+  if (!refiner) throw std::runtime_error("OpenSubdiv rejected the cage topology");
+  return refiner;
+}
+
+/// Refines `cage` uniformly `depth` times with OpenSubdiv. Throws std::runtime_error when
+/// OpenSubdiv rejects the topology.
+inline OsdRefinement osd_refine(const Mesh& cage, int depth, const SubdivOptions& options) {
   OsdRefinement out;
-  out.refiner.reset(Factory::Create(desc, factory_options));
-  if (!out.refiner) throw std::runtime_error("OpenSubdiv rejected the cage topology");
+  out.refiner = osd_refiner(cage, options);
 
   osd::Far::TopologyRefiner::UniformOptions uniform(depth);
   // Edges and sharpness of the last level are compared too, so keep its full topology.

@@ -12,6 +12,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -148,6 +149,19 @@ struct SparseRefinement {
 /// cages limn cannot subdivide.
 SparseRefinement refine_sparse(const Mesh& cage, std::span<const uint8_t> vertex_depth,
                                std::span<const uint8_t> face_depth, const SubdivOptions& options);
+
+/// Decides which faces of a sparse level to refine: called once per level (0 = the cage) with
+/// the level built so far; sets requested[f] = 1 (requested arrives sized to the level's faces,
+/// all 0) for each face to refine. Faces sharing a vertex with a requested face are refined
+/// too, so each requested face's children have complete vertices. No request ends the
+/// refinement; requests past level 16 throw InputError.
+using SparseRequest = std::function<void(size_t level, const SparseLevel& level_so_far,
+                                         std::vector<uint8_t>& requested)>;
+
+/// Sparse refinement driven level by level (feature-adaptive isolation decides from each
+/// level's own topology and sharpness). SparseLevel::vertex_depth and face_depth stay 0.
+SparseRefinement refine_sparse(const Mesh& cage, const SubdivOptions& options,
+                               const SparseRequest& request);
 
 /// Counts and timings of a lean uniform subdivision (subdivide_uniform).
 struct SubdivideStats {

@@ -1,0 +1,121 @@
+// limn subdiv: feature-adaptive patch tables (FAS, Niessner et al. 2012) with a depth per vertex
+// (Lin et al. 2018), and their evaluation.
+//
+// A patch table covers the limit surface of a Catmull-Clark cage with patches of two kinds:
+// - regular: a bicubic B-spline patch of 16 points, exact wherever its face and 1-ring are
+//   regular; boundary and corner patches are regular patches whose missing row or column is
+//   extrapolated (bit e of PatchParam::boundary, the edge-e convention below);
+// - gregory: an end cap (Loop, Schaefer, Ni, Castano 2009, "Approximating subdivision surfaces
+//   with Gregory patches for hardware tessellation"), 20 points, around whatever a regular patch
+//   cannot express at the depth reached (extraordinary vertices, creases, corners); built like
+//   OpenSubdiv's Far GREGORY_BASIS end caps, so the two agree at the same isolation depth.
+// Faces are refined around irregular features level by level (refine_sparse) until each
+// feature's own depth: every extraordinary vertex may stop at a different level.
+//
+// Parameterisation (OpenSubdiv's Ptex convention): every cage quad is one ptex face, every other
+// cage face gives one ptex face per corner (its level-1 quads). A patch covers the square
+// [u, u + 2^-depth] x [v, v + 2^-depth] of its ptex face, in units of 2^-depth. Patch edge e
+// runs from patch corner e to corner e + 1: edge 0 is v = 0, 1 is u = 1, 2 is v = 1, 3 is u = 0.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "limn/mesh/mesh.hpp"
+#include "limn/subdiv/refine.hpp"
+
+namespace limn {
+
+enum class PatchType : uint8_t { regular = 0, gregory = 1 };
+
+/// Where a patch lies and how it meets its neighbours. 16 bytes, for GPU buffers as is.
+struct PatchParam {
+  uint32_t ptex = 0;       ///< ptex face
+  uint16_t u = 0, v = 0;   ///< origin in the ptex face, in units of 2^-depth
+  uint8_t depth = 0;       ///< depth in the ptex face (level, less one under a non-quad face)
+  uint8_t level = 0;       ///< refinement level the patch's points come from
+  uint8_t boundary = 0;    ///< bit e: edge e is on the boundary (regular patches)
+  uint8_t transition = 0;  ///< bit e: edge e borders finer patches (split it when tessellating)
+  uint32_t base_face = 0;  ///< cage face
+  PatchType type = PatchType::regular;
+  uint8_t corner = 0;  ///< under a non-quad cage face: which corner's ptex face; else 0
+  uint16_t reserved = 0;
+};
+
+struct PatchOptions {
+  SubdivOptions subdiv;
+  /// Isolation depth (FAS's L, OpenSubdiv's adaptive isolation level) of every irregular
+  /// feature when no per-vertex depth is given; the cap of per-vertex depths otherwise. 0-12.
+  int depth = 3;
+};
+
+/// Counts and timings of one build.
+struct PatchStats {
+  std::vector<size_t> regular_by_level, gregory_by_level;  ///< patches per refinement level
+  size_t points = 0;      ///< refined points (all levels) plus end-cap points
+  double refine_ms = 0;   ///< sparse refinement with classification
+  double patches_ms = 0;  ///< gathering patch points and end-cap stencils
+};
+
+/// Flat, GPU-ready patch table. Points are numbered globally: the cage's, then each refined
+/// level's local points (level_offsets[k] is the first of level k), then the end-cap points.
+struct PatchTable {
+  SubdivOptions options;
+  std::vector<uint32_t> level_offsets;       ///< first point of each level; back() = end-cap base
+  std::vector<StencilTable> level_stencils;  ///< level k-1 local points -> level k local points
+  StencilTable gregory_stencils;             ///< global points -> end-cap points
+  std::vector<uint32_t> regular_points;      ///< 16 per regular patch, row-major (4 v + u)
+  std::vector<uint32_t> gregory_points;      ///< 20 per end cap (corner i: P, Ep, Em, Fp, Fm)
+  std::vector<PatchParam> regular_params, gregory_params;
+  uint32_t ptex_count = 0;
+  std::vector<uint32_t> ptex_of_face;  ///< first ptex face of each cage face (size faces + 1)
+
+  size_t point_count() const { return level_offsets.back() + gregory_stencils.size(); }
+  size_t patch_count() const { return regular_params.size() + gregory_params.size(); }
+  /// Every point (3 floats each) from the cage positions: refinement level by level, then the
+  /// end-cap points. O(stencil entries).
+  std::vector<float> points(std::span<const float> cage_positions) const;
+};
+
+/// Builds the patch table. vertex_depth (empty, or one entry per cage vertex, each 0-16) gives
+/// each vertex its own isolation depth; empty means options.depth everywhere (classic FAS). A
+/// face is refined at level k when it has an irregular corner whose depth is not yet reached;
+/// new points inherit depth from what they come from (vertex points from their vertex, edge and
+/// face points the largest of their ends). Non-quad cage faces are always refined once.
+/// O(patches * ring size); throws InputError for cages limn cannot subdivide.
+PatchTable build_patches(const Mesh& cage, const PatchOptions& options,
+                         std::span<const uint8_t> vertex_depth = {}, PatchStats* stats = nullptr);
+
+/// A point on a patch: which patch (regular first, then end caps: index regular_params.size() +
+/// i is end cap i) and patch-local (s, t) in [0, 1]^2.
+struct PatchCoord {
+  uint32_t patch = 0;
+  float s = 0, t = 0;
+};
+
+/// Finds patches by ptex coordinates: a quadtree per ptex face.
+class PatchMap {
+ public:
+  explicit PatchMap(const PatchTable& table);
+  /// The patch over ptex face `ptex` at (u, v) in [0, 1]^2, with its local coordinates.
+  /// O(depth). Throws InputError for a ptex face out of range.
+  PatchCoord find(uint32_t ptex, double u, double v) const;
+
+ private:
+  struct Node {
+    uint32_t child[4];  // high bit set: a patch; else a node; kNone: nothing
+  };
+  std::vector<Node> nodes_;  // nodes_[ptex] is the root of ptex face ptex
+  std::vector<uint8_t> depth_;
+  const PatchTable* table_;
+};
+
+/// Evaluates limit positions (3 floats per coordinate) and, when du/dv are not null, the first
+/// derivatives with respect to the ptex face's u and v (patch-local derivatives scaled by
+/// 2^depth). `points` holds PatchTable::points(). Multi-threaded over coordinates (TBB).
+void evaluate_patches(const PatchTable& table, std::span<const float> points,
+                      std::span<const PatchCoord> coords, float* position, float* du = nullptr,
+                      float* dv = nullptr);
+
+}  // namespace limn

@@ -1,0 +1,184 @@
+// Patch lookup by ptex coordinates and patch evaluation: bicubic B-spline (boundary rows and
+// columns extrapolated) and Gregory (Bezier with rational interior points).
+#include <fmt/format.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "limn/mesh/topology.hpp"
+#include "limn/subdiv/patches.hpp"
+
+namespace limn {
+
+namespace {
+
+constexpr uint32_t kPatchBit = 0x80000000u;
+
+// Uniform cubic B-spline basis and its derivative at t.
+void bspline(double t, double w[4], double d[4]) {
+  const double s = 1.0 - t, t2 = t * t, t3 = t2 * t;
+  w[0] = s * s * s / 6.0;
+  w[1] = (3.0 * t3 - 6.0 * t2 + 4.0) / 6.0;
+  w[2] = (-3.0 * t3 + 3.0 * t2 + 3.0 * t + 1.0) / 6.0;
+  w[3] = t3 / 6.0;
+  d[0] = -0.5 * s * s;
+  d[1] = 1.5 * t2 - 2.0 * t;
+  d[2] = -1.5 * t2 + t + 0.5;
+  d[3] = 0.5 * t2;
+}
+
+// Folds an extrapolated end point (2 * next - next-but-one) into the other weights.
+void fold(double w[4], bool low, bool high) {
+  if (low) w[1] += 2.0 * w[0], w[2] -= w[0], w[0] = 0.0;
+  if (high) w[2] += 2.0 * w[3], w[1] -= w[3], w[3] = 0.0;
+}
+
+void bezier(double t, double w[4], double d[4]) {
+  const double s = 1.0 - t;
+  w[0] = s * s * s, w[1] = 3.0 * t * s * s, w[2] = 3.0 * t * t * s, w[3] = t * t * t;
+  d[0] = -3.0 * s * s, d[1] = 3.0 * s * s - 6.0 * t * s, d[2] = 6.0 * t * s - 3.0 * t * t;
+  d[3] = 3.0 * t * t;
+}
+
+struct Eval {
+  double p[3] = {}, du[3] = {}, dv[3] = {};
+  void add(const float* x, double w, double wu, double wv) {
+    for (int c = 0; c < 3; ++c) p[c] += w * x[c], du[c] += wu * x[c], dv[c] += wv * x[c];
+  }
+};
+
+void eval_regular(const uint32_t* cv, uint8_t boundary, double s, double t, const float* pts,
+                  Eval& e) {
+  double wu[4], du[4], wv[4], dv[4];
+  bspline(s, wu, du), bspline(t, wv, dv);
+  fold(wu, boundary & 8, boundary & 2), fold(du, boundary & 8, boundary & 2);
+  fold(wv, boundary & 1, boundary & 4), fold(dv, boundary & 1, boundary & 4);
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 4; ++x) {
+      const double w = wu[x] * wv[y];
+      if (w == 0.0 && du[x] * wv[y] == 0.0 && wu[x] * dv[y] == 0.0) continue;
+      e.add(pts + 3 * size_t(cv[4 * y + x]), w, du[x] * wv[y], wu[x] * dv[y]);
+    }
+}
+
+void eval_gregory(const uint32_t* cv, double s, double t, const float* pts, Eval& e) {
+  double wu[4], du[4], wv[4], dv[4];
+  bezier(s, wu, du), bezier(t, wv, dv);
+  // Bezier slot (x, y) -> Gregory point (corner * 5 + P/Ep/Em); interior slots blend Fp, Fm.
+  static constexpr int kBoundarySlot[12][3] = {{0, 0, 0},  {1, 0, 1},  {2, 0, 7},  {3, 0, 5},
+                                               {0, 1, 2},  {3, 1, 6},  {0, 2, 16}, {3, 2, 12},
+                                               {0, 3, 15}, {1, 3, 17}, {2, 3, 11}, {3, 3, 10}};
+  for (const auto& b : kBoundarySlot) {
+    const int x = b[0], y = b[1];
+    e.add(pts + 3 * size_t(cv[b[2]]), wu[x] * wv[y], du[x] * wv[y], wu[x] * dv[y]);
+  }
+  // Interior point of corner i: (a * Fp + (D - a) * Fm) / D with a and D linear in (s, t).
+  struct Blend {
+    int x, y, fp;
+    double a, au, av, d, dd_u, dd_v;
+  };
+  const Blend blends[4] = {{1, 1, 3, s, 1, 0, s + t, 1, 1},
+                           {2, 1, 8, t, 0, 1, t + 1.0 - s, -1, 1},
+                           {2, 2, 13, 1.0 - s, -1, 0, 2.0 - s - t, -1, -1},
+                           {1, 2, 18, 1.0 - t, 0, -1, 1.0 - t + s, 1, -1}};
+  for (const Blend& b : blends) {
+    double g = 0.5, gu = 0.0, gv = 0.0;
+    if (b.d > 0.0) {
+      g = b.a / b.d;
+      gu = (b.au * b.d - b.a * b.dd_u) / (b.d * b.d);
+      gv = (b.av * b.d - b.a * b.dd_v) / (b.d * b.d);
+    }
+    const double w = wu[b.x] * wv[b.y], w_u = du[b.x] * wv[b.y], w_v = wu[b.x] * dv[b.y];
+    e.add(pts + 3 * size_t(cv[b.fp]), w * g, w_u * g + w * gu, w_v * g + w * gv);
+    e.add(pts + 3 * size_t(cv[b.fp + 1]), w * (1 - g), w_u * (1 - g) - w * gu,
+          w_v * (1 - g) - w * gv);
+  }
+}
+
+}  // namespace
+
+PatchMap::PatchMap(const PatchTable& table) : table_(&table) {
+  nodes_.assign(table.ptex_count, Node{{kNone, kNone, kNone, kNone}});
+  const size_t nr = table.regular_params.size();
+  for (size_t i = 0; i < table.patch_count(); ++i) {
+    const PatchParam& p = i < nr ? table.regular_params[i] : table.gregory_params[i - nr];
+    if (p.ptex >= table.ptex_count) throw std::logic_error("patch map: ptex face out of range");
+    const uint32_t handle = kPatchBit | uint32_t(i);
+    uint32_t node = p.ptex;
+    if (p.depth == 0) {
+      for (uint32_t& c : nodes_[node].child) c = handle;
+      continue;
+    }
+    for (int l = p.depth - 1; l >= 0; --l) {
+      const uint32_t q = ((p.u >> l) & 1u) | (((p.v >> l) & 1u) << 1);
+      if (l == 0) {
+        nodes_[node].child[q] = handle;
+      } else {
+        if (nodes_[node].child[q] == kNone) {
+          nodes_[node].child[q] = uint32_t(nodes_.size());
+          nodes_.push_back(Node{{kNone, kNone, kNone, kNone}});
+        }
+        if (nodes_[node].child[q] & kPatchBit) throw std::logic_error("patch map: patches overlap");
+        node = nodes_[node].child[q];
+      }
+    }
+  }
+}
+
+PatchCoord PatchMap::find(uint32_t ptex, double u, double v) const {
+  if (ptex >= table_->ptex_count)
+    throw InputError(fmt::format("patch map: ptex face {} out of range", ptex));
+  u = std::clamp(u, 0.0, 1.0), v = std::clamp(v, 0.0, 1.0);
+  uint32_t node = ptex;
+  double x = u, y = v;
+  for (int guard = 0; guard < 32; ++guard) {
+    const uint32_t qx = x >= 0.5 ? 1u : 0u, qy = y >= 0.5 ? 1u : 0u;
+    const uint32_t c = nodes_[node].child[qx | (qy << 1)];
+    if (c == kNone) throw InputError(fmt::format("patch map: no patch at ptex face {}", ptex));
+    if (c & kPatchBit) {
+      const uint32_t i = c & ~kPatchBit;
+      const size_t nr = table_->regular_params.size();
+      const PatchParam& p = i < nr ? table_->regular_params[i] : table_->gregory_params[i - nr];
+      const double scale = double(1u << p.depth);
+      PatchCoord pc;
+      pc.patch = i;
+      pc.s = float(std::clamp(u * scale - p.u, 0.0, 1.0));
+      pc.t = float(std::clamp(v * scale - p.v, 0.0, 1.0));
+      return pc;
+    }
+    x = 2.0 * x - qx, y = 2.0 * y - qy;
+    node = c;
+  }
+  throw std::logic_error("patch map: too deep");
+}
+
+void evaluate_patches(const PatchTable& table, std::span<const float> points,
+                      std::span<const PatchCoord> coords, float* position, float* du, float* dv) {
+  if (points.size() < 3 * table.point_count())
+    throw InputError("evaluate patches: fewer points than the patch table needs");
+  const size_t nr = table.regular_params.size(), np = table.patch_count();
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, coords.size(), 1024), [&](const auto& range) {
+    for (size_t i = range.begin(); i != range.end(); ++i) {
+      const PatchCoord& c = coords[i];
+      if (c.patch >= np) throw InputError("evaluate patches: patch index out of range");
+      Eval e;
+      const PatchParam& p =
+          c.patch < nr ? table.regular_params[c.patch] : table.gregory_params[c.patch - nr];
+      if (c.patch < nr)
+        eval_regular(&table.regular_points[16 * size_t(c.patch)], p.boundary, c.s, c.t,
+                     points.data(), e);
+      else
+        eval_gregory(&table.gregory_points[20 * (size_t(c.patch) - nr)], c.s, c.t, points.data(),
+                     e);
+      const double scale = double(1u << p.depth);
+      for (int k = 0; k < 3; ++k) {
+        position[3 * i + k] = float(e.p[k]);
+        if (du) du[3 * i + k] = float(e.du[k] * scale);
+        if (dv) dv[3 * i + k] = float(e.dv[k] * scale);
+      }
+    }
+  });
+}
+
+}  // namespace limn

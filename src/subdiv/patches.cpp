@@ -1,0 +1,672 @@
+// Feature-adaptive patch tables: isolation by sparse refinement, classification per face, patch
+// points, and Gregory end caps.
+//
+// The end-cap points follow OpenSubdiv 3.5's Far GREGORY_BASIS end caps (its GregoryConverter:
+// limit position P, edge points Ep/Em from the limit tangent masks with its eigenvalue scaling,
+// face points Fp/Fm from Loop et al. 2009's formula with its cosine terms), so that the test
+// suite can hold limn to OpenSubdiv's adaptive surface at the same isolation level.
+#include "limn/subdiv/patches.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+#include <utility>
+
+#include "limn/mesh/topology.hpp"
+
+namespace limn {
+
+namespace {
+
+constexpr int kMaxDepth = 16;
+constexpr float kInf = kInfiniteSharpness;
+
+double ms_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// A sparse linear combination of global points; merged per point when emitted.
+struct Terms {
+  std::vector<std::pair<uint32_t, double>> t;
+  void add(uint32_t p, double w) { t.emplace_back(p, w); }
+  void add(const Terms& o, double s) {
+    for (const auto& [p, w] : o.t) t.emplace_back(p, w * s);
+  }
+  void emit(StencilTable& table) {
+    std::sort(t.begin(), t.end());
+    for (size_t i = 0; i < t.size();) {
+      const uint32_t p = t[i].first;
+      double w = 0;
+      for (; i < t.size() && t[i].first == p; ++i) w += t[i].second;
+      if (w != 0.0) table.indices.push_back(p), table.weights.push_back(float(w));
+    }
+    table.offsets.push_back(uint32_t(table.indices.size()));
+  }
+};
+
+// One vertex's neighbourhood in rotational order: face i lies between edge i (towards the next
+// vertex of face i) and edge i + 1; boundary vertices start at their leading boundary edge.
+struct Ring {
+  std::vector<uint32_t> edge_end;  // other end of each edge (nfaces, or nfaces + 1 on a boundary)
+  std::vector<uint32_t> diagonal;  // vertex opposite the centre in each (quad) face
+  std::vector<uint32_t> face;      // face ids
+  bool boundary = false, manifold = true, all_quads = true;
+};
+
+// Per-level state of the isolation.
+struct Level {
+  Topology topo;
+  std::vector<float> corner_sharpness;  // sharpness of each corner's edge (by corner)
+  std::vector<uint8_t> rem;             // per vertex: levels still wanted around it
+  std::vector<uint8_t> irregular;       // per vertex (complete ones only)
+  std::vector<uint8_t> owned;           // per face: this level covers it (or a deeper one)
+  std::vector<uint8_t> requested;       // per face: refined for its own sake
+  struct Face {
+    uint32_t ptex = kNone, base = 0;
+    uint16_t u = 0, v = 0;
+    uint8_t depth = 0, rot = 0, corner = 0;
+  };
+  std::vector<Face> param;
+  // This level's faces and edges, which the next level's provenance refers to.
+  std::vector<uint32_t> face_offsets, face_vertices, edge_vertices;
+};
+
+class Builder {
+ public:
+  Builder(const Mesh& cage, const PatchOptions& o, std::span<const uint8_t> depth)
+      : cage_(cage), o_(o), depth_(depth) {}
+
+  void request(size_t k, const SparseLevel& S, std::vector<uint8_t>& requested);
+  void build(PatchTable& out, SparseRefinement& r, PatchStats* stats);
+
+ private:
+  Ring ring(const Level& L, const RefinedLevel& R, uint32_t v) const;
+  Ring span(const Level& L, const RefinedLevel& R, uint32_t corner, bool& sharp) const;
+  bool regular_vertex(const Level& L, const RefinedLevel& R, uint32_t v) const;
+  void aligned_corners(const Level& L, const RefinedLevel& R, uint32_t f, uint32_t c[4]) const;
+
+  const Mesh& cage_;
+  PatchOptions o_;
+  std::span<const uint8_t> depth_;
+  std::vector<Level> levels_;
+  uint32_t ptex_count_ = 0;
+};
+
+Ring Builder::ring(const Level& L, const RefinedLevel& R, uint32_t v) const {
+  const Topology& t = L.topo;
+  const uint32_t* fv = R.face_vertices.data();
+  Ring g;
+  const uint32_t s0 = t.vertex_offsets[v], n = t.vertex_offsets[v + 1] - s0;
+  uint32_t start = n ? t.vertex_corners[s0] : kNone;
+  for (uint32_t i = 0; i < n; ++i) {
+    const uint32_t c = t.vertex_corners[s0 + i];
+    for (const uint32_t h : {c, t.corner_prev[c]}) {
+      const uint32_t tw = t.corner_twin[h];
+      if (tw == kNonManifold || (tw != kNone && fv[tw] == fv[h])) g.manifold = false;
+    }
+    if (t.corner_twin[c] == kNone && !g.boundary) start = c, g.boundary = true;
+  }
+  if (!g.manifold || n == 0) {
+    g.manifold = false;
+    return g;
+  }
+  uint32_t c = start;
+  for (uint32_t i = 0; i < n; ++i) {
+    const uint32_t f = t.corner_face[c];
+    const uint32_t size = R.face_offsets[f + 1] - R.face_offsets[f];
+    g.all_quads = g.all_quads && size == 4;
+    g.edge_end.push_back(fv[t.corner_next[c]]);
+    g.diagonal.push_back(fv[t.corner_next[t.corner_next[c]]]);
+    g.face.push_back(f);
+    const uint32_t in = t.corner_prev[c];
+    const uint32_t tw = t.corner_twin[in];
+    if (tw == kNone) {
+      g.edge_end.push_back(fv[in]);
+      break;
+    }
+    if (tw == start || tw >= kNonManifold) break;
+    c = tw;
+  }
+  if (g.face.size() != n) g.manifold = false;  // faces in more than one fan
+  return g;
+}
+
+// The fan of faces around a patch corner that an end cap sees (OpenSubdiv's corner spans with
+// its default options, infinitely sharp features approximated as smooth): the whole ring, or,
+// when non-manifold edges cut it, the faces between the cuts that hold the patch face, as a
+// boundary. `corner` is the patch face's corner at the vertex. `sharp`: the end cap
+// interpolates the vertex (a one-face boundary vertex, OpenSubdiv's sharp and legacy corners).
+Ring Builder::span(const Level& L, const RefinedLevel& R, uint32_t corner, bool& sharp) const {
+  const Topology& t = L.topo;
+  const uint32_t* fv = R.face_vertices.data();
+  const uint32_t v = fv[corner];
+  const uint32_t n = t.vertex_offsets[v + 1] - t.vertex_offsets[v];
+  auto cut = [&](uint32_t h) {
+    const uint32_t tw = t.corner_twin[h];
+    return tw >= kNonManifold || fv[tw] == fv[h];
+  };
+  // Back up to the leading cut (or all the way round).
+  uint32_t start = corner;
+  for (uint32_t guard = 0; guard <= n; ++guard) {
+    if (cut(start)) break;
+    const uint32_t prev = t.corner_next[t.corner_twin[start]];
+    if (prev == corner) break;
+    start = prev;
+  }
+  Ring g;
+  g.boundary = cut(start);
+  uint32_t c = start;
+  for (uint32_t guard = 0; guard <= n; ++guard) {
+    const uint32_t f = t.corner_face[c];
+    g.all_quads = g.all_quads && R.face_offsets[f + 1] - R.face_offsets[f] == 4;
+    g.edge_end.push_back(fv[t.corner_next[c]]);
+    g.diagonal.push_back(fv[t.corner_next[t.corner_next[c]]]);
+    g.face.push_back(f);
+    const uint32_t in = t.corner_prev[c];
+    if (cut(in)) {
+      g.edge_end.push_back(fv[in]);
+      break;
+    }
+    c = t.corner_twin[in];
+    if (c == start) break;
+  }
+  g.manifold = g.face.size() == n;
+  sharp = g.boundary && g.face.size() == 1;
+  return g;
+}
+
+// Regular: the limit surface around the vertex is the B-spline of its ring (interior valence 4,
+// regular boundary with two faces, corner with one face under the corner rule), with no sharp
+// feature of its own.
+bool Builder::regular_vertex(const Level& L, const RefinedLevel& R, uint32_t v) const {
+  const Topology& t = L.topo;
+  const Ring g = ring(L, R, v);
+  if (!g.manifold || !g.all_quads) return false;
+  for (uint32_t i = t.vertex_offsets[v]; i < t.vertex_offsets[v + 1]; ++i) {
+    const uint32_t c = t.vertex_corners[i];
+    for (const uint32_t h : {c, t.corner_prev[c]})
+      if (t.corner_twin[h] != kNone && L.corner_sharpness[h] > 0.0f) return false;
+  }
+  const float vs = R.vertex_sharpness[v];
+  const size_t nf = g.face.size();
+  if (!g.boundary) return nf == 4 && vs == 0.0f;
+  if (nf == 2) return vs == 0.0f;
+  return nf == 1 && vs >= kInf;
+}
+
+// The four corners of quad f in ptex order (corner s at ptex square corner s).
+void Builder::aligned_corners(const Level& L, const RefinedLevel& R, uint32_t f,
+                              uint32_t c[4]) const {
+  const uint32_t b = R.face_offsets[f];
+  const uint32_t rot = L.param[f].rot;
+  for (uint32_t s = 0; s < 4; ++s) c[s] = b + (s + 4 - rot) % 4;  // corner ids
+}
+
+void Builder::request(size_t k, const SparseLevel& S, std::vector<uint8_t>& requested) {
+  const RefinedLevel& R = S.level;
+  const size_t nv = R.vertex_count(), nf = R.face_count();
+  Level& L = levels_.emplace_back();
+  L.topo = build_topology(nv, R.face_offsets, R.face_vertices);
+  const Topology& t = L.topo;
+
+  // Sharpness per corner: the level numbers its edges its own way.
+  {
+    std::vector<uint32_t> off(nv + 1, 0);
+    const size_t ne = R.edge_count();
+    for (size_t e = 0; e < ne; ++e) ++off[R.edge_vertices[2 * e] + 1];
+    for (size_t v = 0; v < nv; ++v) off[v + 1] += off[v];
+    std::vector<uint32_t> fill(off.begin(), off.end() - 1), edges(ne);
+    for (size_t e = 0; e < ne; ++e) edges[fill[R.edge_vertices[2 * e]]++] = uint32_t(e);
+    auto find = [&](uint32_t a, uint32_t b) -> float {
+      for (uint32_t i = off[a]; i < off[a + 1]; ++i)
+        if (R.edge_vertices[2 * size_t(edges[i]) + 1] == b) return R.edge_sharpness[edges[i]];
+      return -1.0f;
+    };
+    L.corner_sharpness.resize(t.corner_face.size());
+    for (size_t c = 0; c < t.corner_face.size(); ++c) {
+      const uint32_t a = R.face_vertices[c], b = R.face_vertices[t.corner_next[c]];
+      float s = find(a, b);
+      if (s < 0.0f) s = find(b, a);
+      L.corner_sharpness[c] = std::max(s, 0.0f);
+    }
+  }
+
+  // Depth wanted around each vertex.
+  L.rem.assign(nv, 0);
+  if (k == 0) {
+    for (size_t v = 0; v < nv; ++v)
+      L.rem[v] = uint8_t(depth_.empty() ? o_.depth : std::min<int>(depth_[v], kMaxDepth));
+  } else {
+    const Level& P = levels_[k - 1];
+    auto dec = [](int d) { return uint8_t(d > 0 ? d - 1 : 0); };
+    size_t i = 0;
+    for (uint32_t f : S.parent_faces) {
+      int d = 0;
+      for (uint32_t c = P.face_offsets[f]; c < P.face_offsets[f + 1]; ++c)
+        d = std::max<int>(d, P.rem[P.face_vertices[c]]);
+      L.rem[i++] = dec(d);
+    }
+    for (uint32_t e : S.parent_edges)
+      L.rem[i++] = dec(std::max(P.rem[P.edge_vertices[2 * size_t(e)]],
+                                P.rem[P.edge_vertices[2 * size_t(e) + 1]]));
+    for (uint32_t v : S.parent_vertices) L.rem[i++] = dec(P.rem[v]);
+  }
+
+  // Which faces this level covers, and their ptex placement.
+  L.owned.assign(nf, 0);
+  L.param.resize(nf);
+  if (k == 0) {
+    uint32_t ptex = 0;
+    for (uint32_t f = 0; f < nf; ++f) {
+      L.owned[f] = !R.face_hole[f];
+      L.param[f].ptex = ptex;
+      L.param[f].base = f;
+      ptex += R.face_offsets[f + 1] - R.face_offsets[f] == 4
+                  ? 1
+                  : R.face_offsets[f + 1] - R.face_offsets[f];
+    }
+    ptex_count_ = ptex;
+  } else {
+    const Level& P = levels_[k - 1];
+    uint32_t child = 0;
+    for (uint32_t f = 0; f < nf; ++f) {
+      const uint32_t pf = S.face_parent[f];
+      child = f > 0 && S.face_parent[f - 1] == pf ? child + 1 : 0;
+      L.owned[f] = P.requested[pf] && !R.face_hole[f];
+      const Level::Face& pp = P.param[pf];
+      Level::Face& cp = L.param[f];
+      cp.base = pp.base;
+      if (k == 1 && P.face_offsets[pf + 1] - P.face_offsets[pf] != 4) {
+        cp.ptex = pp.ptex + child;  // a non-quad's corner quad is a ptex face of its own
+        cp.corner = uint8_t(child);
+        cp.rot = 0;
+      } else {
+        const uint32_t q = (child + pp.rot) % 4;
+        cp.ptex = pp.ptex;
+        cp.corner = pp.corner;
+        cp.rot = uint8_t(q);
+        cp.depth = uint8_t(pp.depth + 1);
+        cp.u = uint16_t(2 * pp.u + (q == 1 || q == 2));
+        cp.v = uint16_t(2 * pp.v + (q >= 2));
+      }
+    }
+  }
+
+  // Irregular corners of covered faces; a face is refined while one of them wants depth.
+  L.irregular.assign(nv, 0);
+  std::vector<uint8_t> seen(nv, 0);
+  L.requested.assign(nf, 0);
+  for (uint32_t f = 0; f < nf; ++f) {
+    if (!L.owned[f]) continue;
+    const uint32_t b = R.face_offsets[f], e = R.face_offsets[f + 1];
+    bool want = e - b != 4 && k == 0;  // non-quads: always once
+    for (uint32_t c = b; c < e; ++c) {
+      const uint32_t v = R.face_vertices[c];
+      if (!seen[v]) seen[v] = 1, L.irregular[v] = !regular_vertex(L, R, v);
+      want = want || (L.irregular[v] && L.rem[v] > 0);
+    }
+    L.requested[f] = want && k < size_t(kMaxDepth);
+    requested[f] = L.requested[f];
+  }
+  L.face_offsets = R.face_offsets;
+  L.face_vertices = R.face_vertices;
+  L.edge_vertices = R.edge_vertices;
+}
+
+// Gregory end-cap points of one quad (OpenSubdiv's GregoryConverter; see the file comment).
+class GregoryCap {
+ public:
+  struct Corner {
+    uint32_t v = 0;              // global point id
+    std::vector<uint32_t> ring;  // global ids: edge end 2m, face diagonal 2m + 1
+    int faces = 0, face_in_ring = 0, valence = 0;
+    bool boundary = false, sharp = false, regular = false;
+    bool ep_on_boundary = false, em_on_boundary = false;
+    bool fp_regular = false, fm_regular = false, fp_copied = false, fm_copied = false;
+    double cos_angle = 0;
+  };
+  Corner c[4];
+  Terms p[4], ep[4], em[4], fp[4], fm[4];
+
+  void finish_topology();
+  void compute();
+
+ private:
+  void edge_points(int i);
+  void face_points(int i);
+  void irregular_face_point(int near, int edge, int far, const Terms& e_near, const Terms& e_far,
+                            double sign, Terms& out) const;
+};
+
+void GregoryCap::finish_topology() {
+  const double pi = std::numbers::pi;
+  for (Corner& k : c) {
+    k.valence = k.faces + (k.boundary ? 1 : 0);
+    k.regular = (k.faces << (k.boundary ? 1 : 0)) == 4 && !k.sharp;
+    const double angle = k.regular ? 0.5 * pi : (k.boundary ? pi : 2.0 * pi) / std::max(k.faces, 1);
+    k.cos_angle = k.regular ? 0.0 : std::cos(angle);
+  }
+  for (int i = 0; i < 4; ++i) {
+    Corner& k = c[i];
+    const Corner &next = c[(i + 1) & 3], &prev = c[(i + 3) & 3];
+    k.fp_regular = k.regular && next.regular;
+    k.fm_regular = k.regular && prev.regular;
+    if (!k.boundary) continue;
+    k.ep_on_boundary = k.face_in_ring == 0;
+    k.em_on_boundary = k.face_in_ring == k.faces - 1;
+    if (k.faces > 1) {
+      // One of the corner's patch edges is a boundary: its two face points coincide.
+      if (k.ep_on_boundary) k.fp_regular = k.fm_regular, k.fp_copied = !k.fp_regular;
+      if (k.em_on_boundary) k.fm_regular = k.fp_regular, k.fm_copied = !k.fm_regular;
+    } else {
+      k.fp_regular = k.fm_regular = true;
+    }
+  }
+}
+
+// Tangent scale of OpenSubdiv's Gregory points: 16/n / (c + 5 + sqrt((c + 9)(c + 1))), c =
+// cos(2 pi / n) (its table for n < 30 holds the same values).
+double tangent_coefficient(int n) {
+  const double ct = std::cos(2.0 * std::numbers::pi / n);
+  return 16.0 / n / (ct + 5.0 + std::sqrt((ct + 9.0) * (ct + 1.0)));
+}
+
+void GregoryCap::edge_points(int i) {
+  const Corner& k = c[i];
+  const uint32_t v = k.v, next = c[(i + 1) & 3].v, prev = c[(i + 3) & 3].v;
+  const std::vector<uint32_t>& r = k.ring;
+  if (k.regular && !k.boundary) {
+    p[i].add(v, 4.0 / 9.0);
+    for (int m = 0; m < 4; ++m) p[i].add(r[2 * m], 1.0 / 9.0), p[i].add(r[2 * m + 1], 1.0 / 36.0);
+    const int e_p = 2 * k.face_in_ring, e_m = 2 * ((k.face_in_ring + 1) & 3);
+    const int o_p = 2 * ((k.face_in_ring + 2) & 3), o_m = 2 * ((k.face_in_ring + 3) & 3);
+    ep[i].add(v, 4.0 / 9.0), ep[i].add(r[e_p], 2.0 / 9.0), ep[i].add(r[e_m], 1.0 / 9.0);
+    ep[i].add(r[o_m], 1.0 / 9.0), ep[i].add(r[e_p + 1], 1.0 / 18.0);
+    ep[i].add(r[o_m + 1], 1.0 / 18.0);
+    em[i].add(v, 4.0 / 9.0), em[i].add(r[e_m], 2.0 / 9.0), em[i].add(r[e_p], 1.0 / 9.0);
+    em[i].add(r[o_p], 1.0 / 9.0), em[i].add(r[e_p + 1], 1.0 / 18.0);
+    em[i].add(r[e_m + 1], 1.0 / 18.0);
+  } else if (k.regular) {  // regular boundary: two faces
+    Terms& on = k.ep_on_boundary ? ep[i] : em[i];
+    Terms& in = k.ep_on_boundary ? em[i] : ep[i];
+    p[i].add(v, 2.0 / 3.0), p[i].add(r[0], 1.0 / 6.0), p[i].add(r[4], 1.0 / 6.0);
+    on.add(v, 2.0 / 3.0), on.add(r[k.ep_on_boundary ? 0 : 4], 1.0 / 3.0);
+    in.add(v, 4.0 / 9.0), in.add(r[2], 2.0 / 9.0), in.add(r[0], 1.0 / 9.0);
+    in.add(r[4], 1.0 / 9.0), in.add(r[1], 1.0 / 18.0), in.add(r[3], 1.0 / 18.0);
+  } else if (k.sharp || (k.boundary && k.faces == 1)) {
+    // A sharp corner interpolates; a smooth one-face boundary follows its crease curve.
+    if (k.sharp) {
+      p[i].add(v, 1.0);
+    } else {
+      p[i].add(v, 4.0 / 6.0), p[i].add(next, 1.0 / 6.0), p[i].add(prev, 1.0 / 6.0);
+    }
+    ep[i].add(v, 2.0 / 3.0), ep[i].add(next, 1.0 / 3.0);
+    em[i].add(v, 2.0 / 3.0), em[i].add(prev, 1.0 / 3.0);
+  } else if (!k.boundary) {
+    // Smooth interior: the limit position, and the limit tangent along each patch edge scaled
+    // by OpenSubdiv's eigenvalue coefficient.
+    const int n = k.valence;
+    const double pc = 1.0 / (n * (n + 5.0)), tc = tangent_coefficient(n) * 0.5 / (n + 5.0);
+    const double th = 2.0 * std::numbers::pi / n;
+    std::vector<double> w(2 * size_t(n), 0.0);  // tangent along ring edge 0
+    for (int m = 0; m < n; ++m) {
+      const int mp = (m + n - 1) % n, mn = (m + 1) % n;
+      const double cm = tc * std::cos(th * m);
+      w[2 * mp] += 2 * cm, w[2 * mp + 1] += cm, w[2 * m] += 4 * cm, w[2 * m + 1] += cm;
+      w[2 * mn] += 2 * cm;
+    }
+    p[i].add(v, n / (n + 5.0)), ep[i].add(v, n / (n + 5.0)), em[i].add(v, n / (n + 5.0));
+    for (int m = 0; m < 2 * n; ++m) {
+      const double pw = (m & 1) ? pc : 4 * pc;
+      // Ep is the tangent rotated onto edge face_in_ring, Em onto the next edge.
+      const int sp = (m + 2 * (n - k.face_in_ring)) % (2 * n);
+      const int sm = (m + 2 * (2 * n - k.face_in_ring - 1)) % (2 * n);
+      p[i].add(r[m], pw);
+      ep[i].add(r[m], pw + w[sp]);
+      em[i].add(r[m], pw + w[sm]);
+    }
+  } else {
+    // Smooth boundary with three or more faces.
+    const int nf = k.faces, n = k.valence, N = 2 * n - 1;
+    const double th = std::numbers::pi / nf, ct = std::cos(th), st = std::sin(th);
+    const double d = 1.0 / (3.0 * nf + ct);
+    std::vector<double> pw(2 * size_t(n), 0.0), tw(2 * size_t(n), 0.0);
+    pw[0] = 4.0 / 6.0, pw[1] = 1.0 / 6.0, pw[N] = 1.0 / 6.0;
+    const double alpha0 = -((1.0 + 2.0 * ct) * std::sqrt(1.0 + ct)) * d / std::sqrt(1.0 - ct);
+    tw[0] = -4.0 * st * d / 3.0, tw[1] = alpha0 / 3.0, tw[2] = st * d / 3.0, tw[N] = alpha0 / 3.0;
+    for (int m = 1; m < n - 1; ++m) {
+      tw[1 + 2 * m] = 4.0 * std::sin(th * m) * d / 3.0;
+      tw[2 + 2 * m] = (std::sin(th * m) + std::sin(th * (m + 1))) * d / 3.0;
+    }
+    // Weight index 0 is the corner, index m >= 1 ring point m - 1.
+    auto put = [&](Terms& out, const std::vector<double>& wt) {
+      out.add(v, wt[0]);
+      for (int m = 1; m <= N; ++m) out.add(r[size_t(m) - 1], wt[size_t(m)]);
+    };
+    put(p[i], pw);
+    auto along = [&](int edge, Terms& out) {
+      const double a = th * edge, ca = std::cos(a), sa = std::sin(a);
+      std::vector<double> wt(2 * size_t(n));
+      for (int m = 0; m <= N; ++m) wt[size_t(m)] = tw[size_t(m)] * sa;
+      wt[0] += pw[0];
+      wt[1] += pw[1] + ca / 6.0;
+      wt[size_t(N)] += pw[size_t(N)] - ca / 6.0;
+      put(out, wt);
+    };
+    if (k.ep_on_boundary)
+      ep[i].add(v, 2.0 / 3.0), ep[i].add(r[0], 1.0 / 3.0);
+    else
+      along(k.face_in_ring, ep[i]);
+    if (k.em_on_boundary)
+      em[i].add(v, 2.0 / 3.0), em[i].add(r[size_t(N) - 1], 1.0 / 3.0);
+    else
+      along((k.face_in_ring + 1) % n, em[i]);
+  }
+}
+
+void GregoryCap::irregular_face_point(int near, int edge, int far, const Terms& e_near,
+                                      const Terms& e_far, double sign, Terms& out) const {
+  const Corner& k = c[near];
+  const double cn = k.cos_angle, cf = c[far].cos_angle;
+  out.add(p[near], cf / 3.0);
+  out.add(e_near, (3.0 - 2.0 * cn - cf) / 3.0);
+  out.add(e_far, 2.0 * cn / 3.0);
+  const int n = k.valence, prev = (edge + n - 1) % n, next = (edge + 1) % n;
+  out.add(k.ring[2 * size_t(prev)], -sign / 9.0);
+  out.add(k.ring[2 * size_t(prev) + 1], -sign / 18.0);
+  out.add(k.ring[2 * size_t(edge) + 1], sign / 18.0);
+  out.add(k.ring[2 * size_t(next)], sign / 9.0);
+}
+
+void GregoryCap::face_points(int i) {
+  const Corner& k = c[i];
+  const int next = (i + 1) & 3, opp = (i + 2) & 3, prev = (i + 3) & 3;
+  auto regular = [&](Terms& out) {
+    out.add(k.v, 4.0 / 9.0), out.add(c[prev].v, 2.0 / 9.0), out.add(c[next].v, 2.0 / 9.0);
+    out.add(c[opp].v, 1.0 / 9.0);
+  };
+  if (k.fp_regular) regular(fp[i]);
+  if (k.fm_regular) regular(fm[i]);
+  if (!k.fp_regular && !k.fp_copied)
+    irregular_face_point(i, k.face_in_ring, next, ep[i], em[next], 1.0, fp[i]);
+  if (!k.fm_regular && !k.fm_copied)
+    irregular_face_point(i, (k.face_in_ring + 1) % k.valence, prev, em[i], ep[prev], -1.0, fm[i]);
+  if (k.fp_copied) fp[i] = fm[i];
+  if (k.fm_copied) fm[i] = fp[i];
+}
+
+void GregoryCap::compute() {
+  for (int i = 0; i < 4; ++i) edge_points(i);
+  for (int i = 0; i < 4; ++i) face_points(i);
+}
+
+void Builder::build(PatchTable& out, SparseRefinement& r, PatchStats* stats) {
+  const auto t0 = std::chrono::steady_clock::now();
+  out.options = o_.subdiv;
+  out.level_offsets.assign(1, 0);
+  for (const SparseLevel& S : r.levels)
+    out.level_offsets.push_back(out.level_offsets.back() + uint32_t(S.level.vertex_count()));
+  out.level_stencils = std::move(r.stencils);
+  out.ptex_count = ptex_count_;
+  out.ptex_of_face.assign(1, 0);
+  for (size_t f = 0; f < cage_.face_count(); ++f) {
+    const uint32_t n = uint32_t(cage_.face_size(f));
+    out.ptex_of_face.push_back(out.ptex_of_face.back() + (n == 4 ? 1 : n));
+  }
+  const uint32_t cap_base = out.level_offsets.back();
+  if (stats) {
+    stats->regular_by_level.assign(r.levels.size(), 0);
+    stats->gregory_by_level.assign(r.levels.size(), 0);
+  }
+
+  static constexpr int kPos[4][2] = {{1, 1}, {2, 1}, {2, 2}, {1, 2}};
+  static constexpr int kD1[4][2] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}};  // towards corner i + 1
+  static constexpr int kD2[4][2] = {{0, 1}, {-1, 0}, {0, -1}, {1, 0}};  // towards corner i - 1
+  for (size_t k = 0; k < r.levels.size(); ++k) {
+    const Level& L = levels_[k];
+    const RefinedLevel& R = r.levels[k].level;
+    const Topology& t = L.topo;
+    const uint32_t off = out.level_offsets[k];
+    for (uint32_t f = 0; f < R.face_count(); ++f) {
+      if (!L.owned[f] || L.requested[f]) continue;
+      if (R.face_offsets[f + 1] - R.face_offsets[f] != 4)
+        throw std::logic_error("patches: a non-quad face was left unrefined");
+      uint32_t corner[4], a[4];
+      aligned_corners(L, R, f, corner);
+      bool regular = true;
+      for (int i = 0; i < 4; ++i) {
+        a[i] = R.face_vertices[corner[i]];
+        regular = regular && !L.irregular[a[i]];
+      }
+      PatchParam pp;
+      const Level::Face& fp = L.param[f];
+      pp.ptex = fp.ptex, pp.u = fp.u, pp.v = fp.v, pp.depth = fp.depth;
+      pp.level = uint8_t(k), pp.base_face = fp.base, pp.corner = fp.corner;
+      for (int e = 0; e < 4; ++e) {
+        const uint32_t tw = t.corner_twin[corner[e]];
+        if (tw == kNone) pp.boundary |= uint8_t(1u << e);
+        if (tw < kNonManifold) {
+          const uint32_t g = t.corner_face[tw];
+          if (L.owned[g] && L.requested[g]) pp.transition |= uint8_t(1u << e);
+        }
+      }
+      if (regular) {
+        Ring rings[4];
+        int in_ring[4];
+        for (int i = 0; i < 4; ++i) {
+          rings[i] = ring(L, R, a[i]);
+          const auto it = std::find(rings[i].face.begin(), rings[i].face.end(), f);
+          if (it == rings[i].face.end()) throw std::logic_error("patches: face missing in ring");
+          in_ring[i] = int(it - rings[i].face.begin());
+        }
+        pp.type = PatchType::regular;
+        uint32_t grid[16];
+        bool have[16] = {};
+        auto put = [&](int x, int y, uint32_t p) {
+          grid[4 * y + x] = off + p;
+          have[4 * y + x] = true;
+        };
+        for (int i = 0; i < 4; ++i) {
+          const Ring& g = rings[i];
+          const size_t j = size_t(in_ring[i]);
+          const int x = kPos[i][0], y = kPos[i][1];
+          const int* d1 = kD1[i];
+          const int* d2 = kD2[i];
+          auto edge = [&](size_t m, int px, int py) {
+            const size_t id = (j + m) % 4;
+            if (id < g.edge_end.size()) put(px, py, g.edge_end[id]);
+          };
+          auto diag = [&](size_t m, int px, int py) {
+            const size_t id = (j + m) % 4;
+            if (id < g.face.size()) put(px, py, g.diagonal[id]);
+          };
+          put(x, y, a[i]);
+          edge(2, x - d1[0], y - d1[1]);
+          edge(3, x - d2[0], y - d2[1]);
+          diag(2, x - d1[0] - d2[0], y - d1[1] - d2[1]);
+          diag(1, x + d2[0] - d1[0], y + d2[1] - d1[1]);
+          diag(3, x + d1[0] - d2[0], y + d1[1] - d2[1]);
+        }
+        for (int y = 0; y < 4; ++y)
+          for (int x = 0; x < 4; ++x) {
+            if (have[4 * y + x]) continue;
+            const bool phantom = (y == 0 && (pp.boundary & 1)) || (x == 3 && (pp.boundary & 2)) ||
+                                 (y == 3 && (pp.boundary & 4)) || (x == 0 && (pp.boundary & 8));
+            if (!phantom) throw std::logic_error("patches: a regular patch misses a point");
+            grid[4 * y + x] = off + a[0];
+          }
+        out.regular_points.insert(out.regular_points.end(), grid, grid + 16);
+        out.regular_params.push_back(pp);
+        if (stats) ++stats->regular_by_level[k];
+      } else {
+        pp.type = PatchType::gregory;
+        GregoryCap cap;
+        for (int i = 0; i < 4; ++i) {
+          GregoryCap::Corner& cc = cap.c[i];
+          const Ring g = span(L, R, corner[i], cc.sharp);
+          if (!g.all_quads) throw std::logic_error("patches: an end cap next to a non-quad");
+          cc.v = off + a[i];
+          cc.faces = int(g.face.size());
+          cc.face_in_ring = int(std::find(g.face.begin(), g.face.end(), f) - g.face.begin());
+          cc.boundary = g.boundary;
+          for (size_t m = 0; m < g.face.size(); ++m)
+            cc.ring.push_back(off + g.edge_end[m]), cc.ring.push_back(off + g.diagonal[m]);
+          if (g.boundary) cc.ring.push_back(off + g.edge_end.back());
+        }
+        cap.finish_topology();
+        cap.compute();
+        const uint32_t first = cap_base + uint32_t(out.gregory_stencils.size());
+        for (int i = 0; i < 4; ++i)
+          for (Terms* row : {&cap.p[i], &cap.ep[i], &cap.em[i], &cap.fp[i], &cap.fm[i]})
+            row->emit(out.gregory_stencils);
+        for (uint32_t q = 0; q < 20; ++q) out.gregory_points.push_back(first + q);
+        out.gregory_params.push_back(pp);
+        if (stats) ++stats->gregory_by_level[k];
+      }
+    }
+  }
+  if (stats) {
+    stats->points = out.point_count();
+    stats->patches_ms = ms_since(t0);
+  }
+}
+
+}  // namespace
+
+std::vector<float> PatchTable::points(std::span<const float> cage) const {
+  if (cage.size() != 3 * size_t(level_offsets.at(1)))
+    throw InputError(fmt::format("patches: {} cage coordinates for {} points", cage.size(),
+                                 3 * size_t(level_offsets.at(1))));
+  std::vector<float> out(3 * point_count());
+  std::copy(cage.begin(), cage.end(), out.begin());
+  for (size_t k = 0; k < level_stencils.size(); ++k)
+    apply_stencils(level_stencils[k], out.data() + 3 * size_t(level_offsets[k]),
+                   out.data() + 3 * size_t(level_offsets[k + 1]), 3);
+  if (gregory_stencils.size())
+    apply_stencils(gregory_stencils, out.data(), out.data() + 3 * size_t(level_offsets.back()), 3);
+  return out;
+}
+
+PatchTable build_patches(const Mesh& cage, const PatchOptions& options,
+                         std::span<const uint8_t> vertex_depth, PatchStats* stats) {
+  if (options.depth < 0 || options.depth > 12)
+    throw InputError(fmt::format("patches: depth {} out of range (0-12)", options.depth));
+  if (!vertex_depth.empty() && vertex_depth.size() != cage.vertex_count())
+    throw InputError(fmt::format("patches: {} vertex depths for {} vertices", vertex_depth.size(),
+                                 cage.vertex_count()));
+  const auto t0 = std::chrono::steady_clock::now();
+  Builder b(cage, options, vertex_depth);
+  SparseRefinement r = refine_sparse(
+      cage, options.subdiv,
+      [&](size_t k, const SparseLevel& S, std::vector<uint8_t>& req) { b.request(k, S, req); });
+  if (stats) *stats = {}, stats->refine_ms = ms_since(t0);
+  PatchTable out;
+  b.build(out, r, stats);
+  return out;
+}
+
+}  // namespace limn
