@@ -1,5 +1,6 @@
 // libFuzzer target for subdividing hostile cages: any OBJ (with OpenSubdiv tags) that parses must
-// refine uniformly, sparsely and leanly, and give limit stencils, or throw InputError; never
+// refine uniformly, sparsely and leanly, give limit stencils and an adaptive patch table (fixed
+// and per-vertex depth) that tiles every ptex face, or throw InputError; never
 // crash, never break an internal invariant (std::logic_error escapes and is a finding). The lean
 // path must also reproduce the full refinement's points exactly.
 #include <cstddef>
@@ -8,6 +9,7 @@
 #include <vector>
 
 #include "limn/mesh/io.hpp"
+#include "limn/subdiv/patches.hpp"
 #include "limn/subdiv/refine.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
@@ -36,6 +38,24 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const limn::SparseRefinement s = limn::refine_sparse(m, vd, fd, o);
     for (size_t k = 0; k < s.levels.size(); ++k)
       if (s.positions(m, int(k)).size() != 3 * s.levels[k].level.vertex_count()) __builtin_trap();
+    limn::PatchOptions po;
+    po.subdiv = o;
+    po.depth = 2;
+    for (const bool per_vertex : {false, true}) {
+      const limn::PatchTable t =
+          limn::build_patches(m, po, per_vertex ? vd : std::vector<uint8_t>{});
+      const std::vector<float> pts = t.points(m.positions);
+      const limn::PatchMap map(t);
+      std::vector<limn::PatchCoord> coords;
+      for (uint32_t p = 0; p < t.ptex_count; ++p) {
+        try {
+          coords.push_back(map.find(p, 0.3, 0.6));
+        } catch (const limn::InputError&) {  // a hole
+        }
+      }
+      std::vector<float> pos(3 * coords.size()), du(pos.size()), dv(pos.size());
+      limn::evaluate_patches(t, pts, coords, pos.data(), du.data(), dv.data());
+    }
   } catch (const limn::InputError&) {
   }
   return 0;

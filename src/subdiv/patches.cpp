@@ -308,6 +308,12 @@ void Builder::request(size_t k, const SparseLevel& S, std::vector<uint8_t>& requ
       const uint32_t v = R.face_vertices[c];
       if (!seen[v]) seen[v] = 1, L.irregular[v] = !regular_vertex(L, R, v);
       want = want || (L.irregular[v] && L.rem[v] > 0);
+      // Patches need quads all round their corners: faces next to a non-quad go down once too.
+      if (k == 0 && !want)
+        for (uint32_t i = t.vertex_offsets[v]; i < t.vertex_offsets[v + 1] && !want; ++i) {
+          const uint32_t g = t.corner_face[t.vertex_corners[i]];
+          want = R.face_offsets[g + 1] - R.face_offsets[g] != 4;
+        }
     }
     L.requested[f] = want && k < size_t(kMaxDepth);
     requested[f] = L.requested[f];

@@ -251,3 +251,88 @@ TEST(Patches, SharedCagesMatchOpenSubdiv) {
 
 }  // namespace
 }  // namespace limn
+
+namespace limn {
+namespace {
+
+// Per-vertex depths: the patches tile every ptex face exactly once (PatchMap rejects overlaps and
+// finds a patch everywhere), regular patches are the exact limit surface (they agree with the
+// fixed-depth table that matches OpenSubdiv wherever both have a regular patch), and transition
+// bits mark exactly the patch edges whose neighbour across is finer.
+TEST(Patches, PerVertexDepthTilesAndStaysExact) {
+  const Mesh cage = make_shape("torus");
+  test::Rng rng(7);
+  std::vector<uint8_t> depth(cage.vertex_count());
+  for (uint8_t& d : depth) d = uint8_t(rng.below(5));
+  PatchOptions po;
+  po.subdiv = subdiv_options(cage);
+  po.depth = 4;
+  const PatchTable dyn = build_patches(cage, po, depth);
+  const PatchTable fixed = build_patches(cage, po);
+  EXPECT_LT(dyn.patch_count(), fixed.patch_count());
+  const PatchMap dmap(dyn), fmap(fixed);
+  const std::vector<float> dpts = dyn.points(cage.positions), fpts = fixed.points(cage.positions);
+  const double diag = bounding_box(cage).diagonal();
+  const size_t dnr = dyn.regular_params.size(), fnr = fixed.regular_params.size();
+  size_t compared = 0;
+  for (uint32_t ptex = 0; ptex < dyn.ptex_count; ++ptex)
+    for (double u : {0.05, 0.3, 0.5, 0.77, 0.95})
+      for (double v : {0.1, 0.45, 0.62, 0.9}) {
+        const PatchCoord a = dmap.find(ptex, u, v), b = fmap.find(ptex, u, v);
+        if (a.patch >= dnr || b.patch >= fnr) continue;
+        float pa[3], pb[3];
+        evaluate_patches(dyn, dpts, std::span(&a, 1), pa);
+        evaluate_patches(fixed, fpts, std::span(&b, 1), pb);
+        const double d = std::hypot(pa[0] - pb[0], pa[1] - pb[1], pa[2] - pb[2]) / diag;
+        EXPECT_LT(d, 1e-6) << "ptex " << ptex << " u " << u << " v " << v;
+        ++compared;
+      }
+  EXPECT_GT(compared, dyn.ptex_count);
+
+  // Transition bits, checked inside each ptex face: just across an edge's midpoint.
+  for (size_t i = 0; i < dyn.patch_count(); ++i) {
+    const PatchParam& p = i < dnr ? dyn.regular_params[i] : dyn.gregory_params[i - dnr];
+    const double size = 1.0 / double(1u << p.depth), eps = size * 1e-3;
+    const double u0 = p.u * size, v0 = p.v * size;
+    const double across[4][2] = {{u0 + size / 2, v0 - eps},
+                                 {u0 + size + eps, v0 + size / 2},
+                                 {u0 + size / 2, v0 + size + eps},
+                                 {u0 - eps, v0 + size / 2}};
+    for (int e = 0; e < 4; ++e) {
+      const double x = across[e][0], y = across[e][1];
+      if (x <= 0 || x >= 1 || y <= 0 || y >= 1) continue;  // the neighbour is another ptex face
+      const PatchCoord c = dmap.find(p.ptex, x, y);
+      const PatchParam& q =
+          c.patch < dnr ? dyn.regular_params[c.patch] : dyn.gregory_params[c.patch - dnr];
+      EXPECT_EQ(bool(p.transition & (1u << e)), q.depth > p.depth)
+          << "patch " << i << " edge " << e;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace limn
+
+namespace limn {
+namespace {
+
+// Depth 0 next to a non-quad (a fuzz finding: an end cap saw the n-gon in its ring and broke an
+// invariant): the faces around a non-quad go down once too, so every patch has quads all round.
+TEST(Patches, DepthZeroNextToNonQuads) {
+  const Mesh cage =
+      read_mesh(std::string(LIMN_SOURCE_DIR) + "/fuzz/corpus/subdiv/patch_endcap_next_to_ngon.obj");
+  PatchOptions po;
+  po.subdiv = subdiv_options(cage);
+  po.depth = 0;
+  const std::vector<uint8_t> zero(cage.vertex_count(), 0);
+  for (const bool per_vertex : {false, true}) {
+    const PatchTable t = build_patches(cage, po, per_vertex ? zero : std::vector<uint8_t>{});
+    EXPECT_GT(t.patch_count(), 0u);
+    const PatchMap map(t);
+    const std::vector<float> pts = t.points(cage.positions);
+    for (const float x : pts) EXPECT_TRUE(std::isfinite(x));
+  }
+}
+
+}  // namespace
+}  // namespace limn

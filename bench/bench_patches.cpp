@@ -1,0 +1,159 @@
+// Feature-adaptive preprocessing benchmark: limn build_patches beside OpenSubdiv 3.5's Far
+// adaptive path in one run (topology + RefineAdaptive + PatchTableFactory with Gregory-basis end
+// caps + the refined-point stencils with the end-cap local points appended), at isolation depths
+// 2, 3, 4, 6 on the FAS cages, the car and pole360. Single thread; medians of `--repeat` runs (one
+// run where OpenSubdiv takes over 5 s).
+//   limn_bench_patches [--repeat N] [--models DIR] [--depths 2,3,4,6]
+#include <fmt/format.h>
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wshadow"
+#pragma GCC diagnostic ignored "-Wconversion"
+#pragma GCC diagnostic ignored "-Wunused-parameter"
+#include <opensubdiv/far/patchTableFactory.h>
+#include <opensubdiv/far/stencilTableFactory.h>
+#include <opensubdiv/far/topologyDescriptor.h>
+#pragma GCC diagnostic pop
+
+#include "limn/mesh/io.hpp"
+#include "limn/subdiv/patches.hpp"
+
+using namespace OpenSubdiv;
+namespace fs = std::filesystem;
+
+namespace {
+
+double now_ms() {
+  return std::chrono::duration<double, std::milli>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+struct OsdResult {
+  size_t patches = 0;
+  double ms = 0;
+};
+
+OsdResult osd_build(const limn::Mesh& m, int depth) {
+  const double t0 = now_ms();
+  std::vector<int> nvpf, idx(m.face_vertices.begin(), m.face_vertices.end());
+  std::vector<int> creases(m.crease_edges.begin(), m.crease_edges.end());
+  std::vector<int> corners(m.corner_vertices.begin(), m.corner_vertices.end());
+  std::vector<int> holes(m.hole_faces.begin(), m.hole_faces.end());
+  for (size_t f = 0; f < m.face_count(); ++f) nvpf.push_back(int(m.face_size(f)));
+  Far::TopologyDescriptor d;
+  d.numVertices = int(m.vertex_count());
+  d.numFaces = int(m.face_count());
+  d.numVertsPerFace = nvpf.data();
+  d.vertIndicesPerFace = idx.data();
+  d.numCreases = int(m.crease_sharpness.size());
+  d.creaseVertexIndexPairs = creases.data();
+  d.creaseWeights = m.crease_sharpness.data();
+  d.numCorners = int(corners.size());
+  d.cornerVertexIndices = corners.data();
+  d.cornerWeights = m.corner_sharpness.data();
+  d.numHoles = int(holes.size());
+  d.holeIndices = holes.data();
+  Sdc::Options so;
+  const limn::SubdivOptions lo = limn::subdiv_options(m);
+  so.SetVtxBoundaryInterpolation(lo.boundary == limn::BoundaryInterpolation::edge_only
+                                     ? Sdc::Options::VTX_BOUNDARY_EDGE_ONLY
+                                     : Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER);
+  so.SetCreasingMethod(lo.crease_method == limn::CreaseMethod::chaikin
+                           ? Sdc::Options::CREASE_CHAIKIN
+                           : Sdc::Options::CREASE_UNIFORM);
+  using Factory = Far::TopologyRefinerFactory<Far::TopologyDescriptor>;
+  std::unique_ptr<Far::TopologyRefiner> r(
+      Factory::Create(d, Factory::Options(Sdc::SCHEME_CATMARK, so)));
+  Far::TopologyRefiner::AdaptiveOptions ao(depth);
+  ao.useSingleCreasePatch = false;
+  ao.useInfSharpPatch = false;
+  r->RefineAdaptive(ao);
+  Far::PatchTableFactory::Options po(depth);
+  po.SetEndCapType(Far::PatchTableFactory::Options::ENDCAP_GREGORY_BASIS);
+  std::unique_ptr<Far::PatchTable> pt(Far::PatchTableFactory::Create(*r, po));
+  Far::StencilTableFactory::Options sto;
+  sto.generateIntermediateLevels = true;
+  sto.generateOffsets = true;
+  std::unique_ptr<const Far::StencilTable> st(Far::StencilTableFactory::Create(*r, sto));
+  std::unique_ptr<const Far::StencilTable> all(st.get());
+  if (const Far::StencilTable* local = pt->GetLocalPointStencilTable()) {
+    all.release();
+    all.reset(Far::StencilTableFactory::AppendLocalPointStencilTable(*r, st.get(), local));
+  } else {
+    all.release();
+  }
+  OsdResult out;
+  out.patches = size_t(pt->GetNumPatchesTotal());
+  out.ms = now_ms() - t0;
+  return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int repeat = 3;
+  fs::path models = LIMN_SHARED_MODELS;
+  std::vector<int> depths = {2, 3, 4, 6};
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--repeat") && i + 1 < argc)
+      repeat = std::max(1, std::atoi(argv[++i]));
+    else if (!std::strcmp(argv[i], "--models") && i + 1 < argc)
+      models = argv[++i];
+    else if (!std::strcmp(argv[i], "--depths") && i + 1 < argc) {
+      depths.clear();
+      for (const char* p = argv[++i]; *p;) {
+        depths.push_back(std::atoi(p));
+        while (*p && *p != ',') ++p;
+        if (*p) ++p;
+      }
+    }
+  }
+  tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
+  const char* names[] = {"quads/bigguy.obj", "quads/monsterfrog.obj", "osd/catmark_car.obj",
+                         "osd/catmark_pole360.obj"};
+  fmt::print("{:<22} {:>5} {:>10} {:>10} {:>10} {:>10} {:>8}\n", "model", "depth", "limn_patch",
+             "osd_patch", "limn_ms", "osd_ms", "osd/limn");
+  for (const char* name : names) {
+    const fs::path path = models / name;
+    if (!fs::exists(path)) {
+      fmt::print("{:<22} missing\n", name);
+      continue;
+    }
+    const limn::Mesh m = limn::read_mesh(path);
+    for (int depth : depths) {
+      std::vector<double> tl, to;
+      size_t pl = 0, po = 0;
+      for (int k = 0; k < repeat; ++k) {
+        limn::PatchOptions opt;
+        opt.subdiv = limn::subdiv_options(m);
+        opt.depth = depth;
+        const double t0 = now_ms();
+        const limn::PatchTable t = limn::build_patches(m, opt);
+        tl.push_back(now_ms() - t0);
+        pl = t.patch_count();
+        const OsdResult o = osd_build(m, depth);
+        to.push_back(o.ms);
+        po = o.patches;
+        if (o.ms > 5000) break;  // OpenSubdiv's high-valence pathology: one run says enough
+      }
+      const double ml = median(tl), mo = median(to);
+      fmt::print("{:<22} {:>5} {:>10} {:>10} {:>10.2f} {:>10.2f} {:>7.2f}x\n",
+                 path.filename().string(), depth, pl, po, ml, mo, mo / ml);
+      std::fflush(stdout);
+    }
+  }
+}
