@@ -1,0 +1,329 @@
+// Watertight tessellation of patch tables (see the header for the idea).
+//
+// Coordinates: every ptex face is an R x R integer grid, R = factor * 2^max_depth, so every
+// sample of every patch has integer coordinates. A sample is keyed where it lies on the cage:
+// inside a ptex face by (ptex, i, j); on a cage edge by the edge (its two vertex ids) and its
+// position along it (0..2R from the lower id: a quad's ptex spans the edge with R units, a
+// non-quad's corner ptex spans half of it); on a spoke of a non-quad (edge point -> face point)
+// by the ptex on its left and the position from the edge point; at cage vertices and face
+// centres by their ids. Lines (rows and columns inside a ptex, cage edges, spokes) collect the
+// samples every patch edge on them contributes; each patch edge then takes all of them.
+#include "limn/subdiv/tessellate.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+
+namespace limn {
+
+namespace {
+
+struct Key {
+  uint64_t hi = 0, lo = 0;
+  bool operator==(const Key& o) const { return hi == o.hi && lo == o.lo; }
+};
+struct KeyHash {
+  size_t operator()(const Key& k) const {
+    uint64_t h = k.hi * 0x9e3779b97f4a7c15ull ^ (k.lo + 0x632be59bd9b4e019ull + (k.hi << 6));
+    h ^= h >> 29;
+    return size_t(h * 0xbf58476d1ce4e5b9ull);
+  }
+};
+
+enum : uint64_t { kRow = 0, kCol = 1, kEdge = 2, kSpoke = 3, kVertex = 4, kFace = 5, kInside = 6 };
+Key make(uint64_t type, uint64_t id, uint64_t q) {
+  return {type << 58 | id, q};
+}
+
+class Tessellator {
+ public:
+  Tessellator(const Mesh& cage, const PatchTable& t, std::span<const float> pts,
+              const TessellateOptions& o)
+      : cage_(cage), t_(t), pts_(pts), o_(o) {}
+  Mesh run();
+
+ private:
+  struct Line {
+    Key key;     // line key (lo = 0)
+    int64_t q0;  // line parameter at the patch edge's start
+    int64_t dq;  // per ptex grid unit along the patch edge (+1 / -1, or +-2 on quad cage edges)
+  };
+  struct Face {  // ptex face -> cage face and corner
+    uint32_t face, corner, size;
+  };
+  Line ptex_boundary(uint32_t p, int e, int64_t t) const;
+  Key boundary_point(const Key& line, int64_t q) const;
+  Key point(uint32_t p, int64_t i, int64_t j) const;
+  Line patch_edge(const PatchParam& pp, int e, int64_t& length) const;
+  uint32_t vertex(const Key& k, uint32_t patch, float s, float t);
+
+  const Mesh& cage_;
+  const PatchTable& t_;
+  std::span<const float> pts_;
+  TessellateOptions o_;
+  int64_t R_ = 0;
+  std::vector<Face> ptex_;
+  std::unordered_map<Key, std::vector<int64_t>, KeyHash> lines_;
+  std::unordered_map<Key, uint32_t, KeyHash> vertices_;
+  std::vector<PatchCoord> coords_;  // one per output vertex
+};
+
+// The line of ptex face p's edge e and the line parameter at t (0..R from ptex corner e).
+Tessellator::Line Tessellator::ptex_boundary(uint32_t p, int e, int64_t t) const {
+  const Face& f = ptex_[p];
+  const uint32_t* v = cage_.face_vertices.data() + cage_.face_offsets[f.face];
+  auto edge = [&](uint32_t a, uint32_t b, int64_t q_from_a, int64_t per_t) {
+    const uint32_t lo = std::min(a, b), hi = std::max(a, b);
+    Line l;
+    l.key = make(kEdge, uint64_t(lo) << 28 | hi, 0);
+    l.q0 = a < b ? q_from_a : 2 * R_ - q_from_a;
+    l.dq = a < b ? per_t : -per_t;
+    return l;
+  };
+  if (f.size == 4) return edge(v[e], v[(e + 1) % 4], 2 * t, 2);
+  const uint32_t n = f.size, k = f.corner;
+  const uint32_t ck = v[k], next = v[(k + 1) % n], prev = v[(k + n - 1) % n];
+  switch (e) {
+    case 0:
+      return edge(ck, next, t, 1);
+    case 3:
+      return edge(prev, ck, R_ + t, 1);
+    case 1:
+      return {make(kSpoke, p, 0), t, 1};
+    default: {
+      const uint32_t pk = k == 0 ? p + n - 1 : p - 1;  // the spoke is the previous corner's
+      return {make(kSpoke, pk, 0), R_ - t, -1};
+    }
+  }
+}
+
+// The canonical key of the point at parameter q of a cage-edge or spoke line.
+Key Tessellator::boundary_point(const Key& line, int64_t q) const {
+  const uint64_t type = line.hi >> 58, id = line.hi & ((1ull << 58) - 1);
+  if (type == kEdge) {
+    if (q <= 0) return make(kVertex, id >> 28, 0);
+    if (q >= 2 * R_) return make(kVertex, id & ((1u << 28) - 1), 0);
+    return {line.hi, uint64_t(q)};
+  }
+  // A spoke of ptex p runs from the midpoint of its corner's leading edge to the face centre.
+  const Face& f = ptex_[id];
+  if (q >= R_) return make(kFace, f.face, 0);
+  if (q <= 0)
+    return boundary_point(ptex_boundary(uint32_t(id), 0, 0).key,
+                          ptex_boundary(uint32_t(id), 0, R_).q0);
+  return {line.hi, uint64_t(q)};
+}
+
+Key Tessellator::point(uint32_t p, int64_t i, int64_t j) const {
+  if (i > 0 && i < R_ && j > 0 && j < R_) return make(kInside, p, uint64_t(i) << 32 | uint64_t(j));
+  int e;
+  int64_t t;
+  if (j == 0)
+    e = 0, t = i;
+  else if (i == R_)
+    e = 1, t = j;
+  else if (j == R_)
+    e = 2, t = R_ - i;
+  else
+    e = 3, t = R_ - j;
+  const Line l = ptex_boundary(p, e, t);
+  return boundary_point(l.key, l.q0);
+}
+
+// The line under edge e of a patch, with the parameter at the edge's start and its step per
+// ptex grid unit; `length` gets the edge's length in grid units.
+Tessellator::Line Tessellator::patch_edge(const PatchParam& pp, int e, int64_t& length) const {
+  const int64_t size = R_ >> pp.depth, u0 = pp.u * size, v0 = pp.v * size;
+  length = size;
+  // Start corner of edge e and its direction.
+  const int64_t ci[4] = {u0, u0 + size, u0 + size, u0}, cj[4] = {v0, v0, v0 + size, v0 + size};
+  const int64_t i = ci[e], j = cj[e];
+  switch (e) {
+    case 0:
+      if (j > 0) return {make(kRow, uint64_t(pp.ptex) << 24 | uint64_t(j), 0), i, 1};
+      return ptex_boundary(pp.ptex, 0, i);
+    case 1:
+      if (i < R_) return {make(kCol, uint64_t(pp.ptex) << 24 | uint64_t(i), 0), j, 1};
+      return ptex_boundary(pp.ptex, 1, j);
+    case 2:
+      if (j < R_) return {make(kRow, uint64_t(pp.ptex) << 24 | uint64_t(j), 0), i, -1};
+      return ptex_boundary(pp.ptex, 2, R_ - i);
+    default:
+      if (i > 0) return {make(kCol, uint64_t(pp.ptex) << 24 | uint64_t(i), 0), j, -1};
+      return ptex_boundary(pp.ptex, 3, R_ - j);
+  }
+}
+
+uint32_t Tessellator::vertex(const Key& k, uint32_t patch, float s, float t) {
+  const auto [it, fresh] = vertices_.try_emplace(k, uint32_t(coords_.size()));
+  if (fresh) coords_.push_back({patch, s, t});
+  return it->second;
+}
+
+Mesh Tessellator::run() {
+  const int n = o_.factor;
+  if (n < 1 || n > 64)
+    throw InputError(fmt::format("tessellate: factor {} out of range (1-64)", n));
+  if (cage_.vertex_count() >= (1u << 28))
+    throw InputError("tessellate: the cage has too many vertices (2^28 at most)");
+  int max_depth = 0;
+  const size_t nr = t_.regular_params.size(), np = t_.patch_count();
+  auto param = [&](size_t i) -> const PatchParam& {
+    return i < nr ? t_.regular_params[i] : t_.gregory_params[i - nr];
+  };
+  for (size_t i = 0; i < np; ++i) max_depth = std::max<int>(max_depth, param(i).depth);
+  R_ = int64_t(n) << max_depth;
+  for (uint32_t f = 0; f < cage_.face_count(); ++f) {
+    const uint32_t size = cage_.face_size(f);
+    for (uint32_t c = 0; c < (size == 4 ? 1 : size); ++c) ptex_.push_back({f, c, size});
+  }
+  if (ptex_.size() != t_.ptex_count) throw InputError("tessellate: the table is not this cage's");
+
+  // Pass 1: every patch edge's own samples on its line.
+  for (size_t i = 0; i < np; ++i)
+    for (int e = 0; e < 4; ++e) {
+      int64_t len;
+      const Line l = patch_edge(param(i), e, len);
+      std::vector<int64_t>& qs = lines_[l.key];
+      for (int k = 0; k <= n; ++k) qs.push_back(l.q0 + l.dq * (len * k / n));
+    }
+  for (auto& [key, qs] : lines_) {
+    std::sort(qs.begin(), qs.end());
+    qs.erase(std::unique(qs.begin(), qs.end()), qs.end());
+  }
+
+  // Pass 2: vertices and triangles per patch.
+  Mesh out;
+  std::vector<uint32_t> tris;
+  std::vector<uint32_t> inner((n + 1) * (n + 1));
+  std::vector<std::pair<double, uint32_t>> side[4];  // (position along the edge 0..1, vertex)
+  static constexpr float kCs[4] = {0, 1, 1, 0}, kCt[4] = {0, 0, 1, 1};
+  for (uint32_t i = 0; i < np; ++i) {
+    const PatchParam& pp = param(i);
+    const int64_t size = R_ >> pp.depth, u0 = pp.u * size, v0 = pp.v * size;
+    for (int e = 0; e < 4; ++e) {
+      int64_t len;
+      const Line l = patch_edge(pp, e, len);
+      const std::vector<int64_t>& qs = lines_[l.key];
+      const int64_t qa = l.q0, qb = l.q0 + l.dq * len;
+      auto lo = std::lower_bound(qs.begin(), qs.end(), std::min(qa, qb));
+      auto hi = std::upper_bound(qs.begin(), qs.end(), std::max(qa, qb));
+      side[e].clear();
+      const uint64_t type = l.key.hi >> 58;
+      for (auto it = lo; it != hi; ++it) {
+        const double a = double(*it - qa) / double(qb - qa);  // 0 at the start corner
+        const float s = float(kCs[e] + a * (kCs[(e + 1) % 4] - kCs[e]));
+        const float t = float(kCt[e] + a * (kCt[(e + 1) % 4] - kCt[e]));
+        Key k;
+        if (type == kRow || type == kCol) {
+          const int64_t along = (*it - l.q0) * l.dq;  // grid units from the start corner
+          const int64_t ci[4] = {u0, u0 + size, u0 + size, u0};
+          const int64_t cj[4] = {v0, v0, v0 + size, v0 + size};
+          const int64_t di[4] = {1, 0, -1, 0}, dj[4] = {0, 1, 0, -1};
+          k = point(pp.ptex, ci[e] + di[e] * along, cj[e] + dj[e] * along);
+        } else {
+          k = boundary_point(l.key, *it);
+        }
+        side[e].emplace_back(a, vertex(k, i, s, t));
+      }
+      std::sort(side[e].begin(), side[e].end());
+    }
+    // Interior grid of the patch, then the four stitching strips.
+    for (int y = 1; y < n; ++y)
+      for (int x = 1; x < n; ++x) {
+        inner[size_t(y) * (n + 1) + x] = uint32_t(coords_.size());
+        coords_.push_back({i, float(x) / float(n), float(y) / float(n)});
+      }
+    for (int y = 1; y + 1 < n; ++y)
+      for (int x = 1; x + 1 < n; ++x) {
+        const uint32_t a = inner[size_t(y) * (n + 1) + x], b = inner[size_t(y) * (n + 1) + x + 1];
+        const uint32_t c = inner[size_t(y + 1) * (n + 1) + x + 1],
+                       d = inner[size_t(y + 1) * (n + 1) + x];
+        tris.insert(tris.end(), {a, b, c, a, c, d});
+      }
+    if (n == 1) {  // no interior grid: fan the boundary around the centre
+      const uint32_t centre = uint32_t(coords_.size());
+      coords_.push_back({i, 0.5f, 0.5f});
+      for (int e = 0; e < 4; ++e)
+        for (size_t k = 0; k + 1 < side[e].size(); ++k)
+          tris.insert(tris.end(), {side[e][k].second, side[e][k + 1].second, centre});
+      continue;
+    }
+    for (int e = 0; e < 4; ++e) {
+      // The inner row along edge e, from its start corner's side to its end's.
+      std::vector<std::pair<double, uint32_t>> row;
+      for (int k = 1; k < n; ++k) {
+        int x = 0, y = 0;
+        switch (e) {
+          case 0:
+            x = k, y = 1;
+            break;
+          case 1:
+            x = n - 1, y = k;
+            break;
+          case 2:
+            x = n - k, y = n - 1;
+            break;
+          default:
+            x = 1, y = n - k;
+            break;
+        }
+        row.emplace_back(double(k) / n, inner[size_t(y) * (n + 1) + x]);
+      }
+      const auto& b = side[e];
+      size_t p = 0, q = 0;
+      while (p + 1 < b.size() || q + 1 < row.size()) {
+        const bool advance_b =
+            q + 1 >= row.size() || (p + 1 < b.size() && b[p + 1].first <= row[q + 1].first);
+        if (advance_b) {
+          tris.insert(tris.end(), {b[p].second, b[p + 1].second, row[q].second});
+          ++p;
+        } else {
+          tris.insert(tris.end(), {b[p].second, row[q + 1].second, row[q].second});
+          ++q;
+        }
+      }
+    }
+  }
+
+  // Evaluate every vertex once.
+  const size_t nv = coords_.size();
+  out.positions.resize(3 * nv);
+  std::vector<float> du(3 * nv), dv(3 * nv);
+  evaluate_patches(t_, pts_, coords_, out.positions.data(), du.data(), dv.data());
+  out.face_vertices = std::move(tris);
+  out.face_offsets.resize(out.face_vertices.size() / 3 + 1);
+  for (size_t f = 0; f < out.face_offsets.size(); ++f) out.face_offsets[f] = uint32_t(3 * f);
+  if (o_.normals) {
+    out.normals = normals_from_tangents(du, dv);
+    out.normal_indices = out.face_vertices;
+  }
+  if (o_.depth_colors) {
+    out.colors.resize(4 * nv);
+    for (size_t v = 0; v < nv; ++v) {
+      depth_color(param(coords_[v].patch).level, &out.colors[4 * v]);
+      out.colors[4 * v + 3] = 1.0f;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+void depth_color(int level, float rgb[3]) {
+  // A short perceptual ramp: dark blue, blue, cyan, green, yellow, orange, red, magenta.
+  static constexpr float kRamp[8][3] = {
+      {0.10f, 0.15f, 0.45f}, {0.15f, 0.35f, 0.85f}, {0.10f, 0.70f, 0.85f}, {0.25f, 0.75f, 0.30f},
+      {0.90f, 0.85f, 0.20f}, {0.95f, 0.55f, 0.15f}, {0.85f, 0.20f, 0.15f}, {0.75f, 0.20f, 0.65f}};
+  const int i = std::clamp(level, 0, 7);
+  for (int c = 0; c < 3; ++c) rgb[c] = kRamp[i][c];
+}
+
+Mesh tessellate_patches(const Mesh& cage, const PatchTable& table, std::span<const float> points,
+                        const TessellateOptions& options) {
+  return Tessellator(cage, table, points, options).run();
+}
+
+}  // namespace limn
