@@ -1,0 +1,76 @@
+// limn subdiv: view-dependent isolation depth per vertex (the "FPU" of Lin, Wang, Sun 2018,
+// in the sound form of ../shared/design/subdivision.md).
+//
+// Around an irregular vertex v the error of the patches at depth d shrinks like r_v^d. The design
+// note's r = mu_n (the sub-subdominant eigenvalue of the Catmull-Clark subdivision matrix) holds
+// for the error normal to the surface; measured at equal parameters (what limn's tests bound)
+// the end caps' error shrinks like max(lambda_n, 1/2), lambda_n the subdominant eigenvalue, so
+// limn uses that. With K_v the depth-0 error in object units and s_v the projected scale in
+// pixels per unit near v,
+//     d_v = clamp(ceil(log(K_v s_v / tau) / log(1 / r_v)), d_min, d_max)
+// keeps the screen error under tau pixels. K_v = c_n * D_v: D_v is the largest second difference
+// of v's ring, c_n a factor per valence calibrated against deep reference surfaces
+// (bench/calibrate_depth.cpp prints it).
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "limn/mesh/mesh.hpp"
+#include "limn/subdiv/refine.hpp"
+
+namespace limn {
+
+/// A pinhole camera: eye, target, up (object units), vertical field of view and image size.
+struct Camera {
+  float eye[3] = {0, 0, 5}, target[3] = {0, 0, 0}, up[3] = {0, 1, 0};
+  float fovy_deg = 45.0f;
+  int width = 1280, height = 720;
+  /// Pixels per object unit at point p: f_px / z with z the depth along the view axis (z is
+  /// clamped to 1e-6 of the eye-target distance, so points at or behind the eye count as very
+  /// near: they get the deepest level, which is safe). `radius` > 0: the largest scale within
+  /// that distance of p (z reduced by radius).
+  double scale_at(const float p[3], double radius = 0) const;
+  /// Projects p to pixel coordinates (x right, y down); false when p is behind the eye.
+  bool project(const float p[3], double& x, double& y) const;
+};
+
+/// A camera looking at the bounding box's centre from +z (slightly raised), framing the whole
+/// box in a width x height image.
+Camera frame_camera(const Mesh& mesh, int width, int height);
+
+/// The subdominant (lambda) and sub-subdominant (mu) eigenvalues of the Catmull-Clark
+/// subdivision matrix of a smooth interior vertex of valence n >= 3.
+void catmark_eigenvalues(int valence, double& lambda, double& mu);
+
+/// Depth-0 error constants, one per cage vertex (object units): 0 for regular vertices, whose
+/// patches are exact; K_v = c_n D_v for the others. O(corners).
+struct VertexErrorModel {
+  std::vector<float> k;   ///< K_v
+  std::vector<float> d;   ///< D_v, the ring's largest second difference (object units)
+  std::vector<float> mu;  ///< error decay per level r_v (max(lambda_n, 1/2); 1/2 at features)
+  std::vector<uint8_t> smooth;  ///< 1: a smooth interior extraordinary vertex (mu = mu_n)
+  std::vector<float> radius;    ///< distance to the farthest ring vertex: the scale is taken at
+                                ///< the ring's nearest possible point, not only at v
+};
+VertexErrorModel vertex_error_model(const Mesh& cage, const SubdivOptions& options);
+
+struct DepthOptions {
+  float tolerance_px = 0.5f;
+  int min_depth = 0, max_depth = 8;
+  float hysteresis = 0.25f;  ///< levels: a depth only drops once the need is this far below it
+};
+
+/// Per-vertex depths for a view. `previous` (empty, or the last selection) gives hysteresis:
+/// depth rises as soon as the view needs it and falls only when the need drops `hysteresis`
+/// levels below the current depth, so the tolerance holds while small camera moves do not
+/// flicker. `overrides` (empty, or one per vertex; 255 = none) pins depths. `estimate_px`, when
+/// given, gets each vertex's estimated screen error at its chosen depth. O(vertices).
+std::vector<uint8_t> select_depths(const Mesh& cage, const VertexErrorModel& model,
+                                   const Camera& camera, const DepthOptions& options,
+                                   std::span<const uint8_t> previous = {},
+                                   std::span<const uint8_t> overrides = {},
+                                   std::vector<float>* estimate_px = nullptr);
+
+}  // namespace limn
