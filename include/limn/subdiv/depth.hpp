@@ -47,9 +47,9 @@ void catmark_eigenvalues(int valence, double& lambda, double& mu);
 /// Depth-0 error constants, one per cage vertex (object units): 0 for regular vertices, whose
 /// patches are exact; K_v = c_n D_v for the others. O(corners).
 struct VertexErrorModel {
-  std::vector<float> k;   ///< K_v
-  std::vector<float> d;   ///< D_v, the ring's largest second difference (object units)
-  std::vector<float> mu;  ///< error decay per level r_v (max(lambda_n, 1/2); 1/2 at features)
+  std::vector<float> k;         ///< K_v
+  std::vector<float> d;         ///< D_v, the ring's largest second difference (object units)
+  std::vector<float> mu;        ///< error decay per level r_v (max(lambda_n, 1/2); 1/2 at features)
   std::vector<uint8_t> smooth;  ///< 1: a smooth interior extraordinary vertex (mu = mu_n)
   std::vector<float> radius;    ///< distance to the farthest ring vertex: the scale is taken at
                                 ///< the ring's nearest possible point, not only at v
