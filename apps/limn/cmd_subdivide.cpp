@@ -1,29 +1,225 @@
-// limn subdivide: uniform Catmull-Clark refinement (adaptive patches come with the next layer).
-// Without --limit it runs the lean path (subdivide_uniform): only the last level is ever kept.
+// limn subdivide: uniform Catmull-Clark refinement, or the feature-adaptive limit surface.
+// --uniform without --limit runs the lean path (subdivide_uniform): only the last level is ever
+// kept. --adaptive builds a patch table (fixed depth, or a depth per vertex from a camera and a
+// pixel tolerance) and writes its watertight tessellation.
 #include <fmt/format.h>
 
 #include <cmath>
+#include <map>
+#include <sstream>
 
 #include "common.hpp"
+#include "limn/subdiv/depth.hpp"
+#include "limn/subdiv/patches.hpp"
 #include "limn/subdiv/refine.hpp"
+#include "limn/subdiv/tessellate.hpp"
 
 namespace limn::cli {
+
+namespace {
+
+struct AdaptiveOpts {
+  int depth = -1, max_depth = 10, tess = 4;
+  float tolerance = -1;
+  std::string camera, resolution;
+  bool depth_colors = false, dynamic = false;  // dynamic: --tolerance was given
+};
+
+// "ex,ey,ez,tx,ty,tz,fovy_deg" -> camera (image size set separately).
+Camera parse_camera(const std::string& s, Camera c) {
+  std::vector<float> v;
+  std::stringstream in(s);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    try {
+      size_t used = 0;
+      v.push_back(std::stof(item, &used));
+      if (used != item.size()) throw std::invalid_argument(item);
+    } catch (const std::exception&) {
+      throw InputError(fmt::format("--camera {}: '{}' is not a number", s, item));
+    }
+  }
+  if (v.size() != 7 || !(v[6] > 0 && v[6] < 180))
+    throw InputError(
+        fmt::format("--camera {}: expected ex,ey,ez,tx,ty,tz,fovy_deg (0 < fovy < 180)", s));
+  for (int k = 0; k < 3; ++k) c.eye[k] = v[size_t(k)], c.target[k] = v[size_t(k) + 3];
+  c.fovy_deg = v[6];
+  for (float x : v)
+    if (!std::isfinite(x)) throw InputError(fmt::format("--camera {}: not finite", s));
+  return c;
+}
+
+void parse_resolution(const std::string& s, int& w, int& h) {
+  const size_t x = s.find('x');
+  try {
+    if (x == std::string::npos) throw std::invalid_argument(s);
+    size_t a = 0, b = 0;
+    w = std::stoi(s.substr(0, x), &a);
+    h = std::stoi(s.substr(x + 1), &b);
+    if (a != x || b != s.size() - x - 1) throw std::invalid_argument(s);
+  } catch (const std::exception&) {
+    throw InputError(fmt::format("--resolution {}: expected WxH, such as 1280x720", s));
+  }
+  if (w < 1 || h < 1 || w > 32768 || h > 32768)
+    throw InputError(fmt::format("--resolution {}: 1-32768 pixels each way", s));
+}
+
+void run_adaptive(const std::string& mesh, const std::string& out_path, const std::string& format,
+                  const AdaptiveOpts& a, bool json) {
+  if (format_from_path(out_path) == MeshFormat::automatic)
+    throw InputError(fmt::format("{}: cannot tell the output format from the extension", out_path));
+  const bool dynamic = a.dynamic;
+  if (dynamic && a.depth >= 0) throw InputError("--depth and --tolerance exclude each other");
+  if (dynamic && !(a.tolerance > 0 && std::isfinite(a.tolerance)))
+    throw InputError(
+        fmt::format("--tolerance {}: must be a positive number of pixels", a.tolerance));
+  const int depth = a.depth >= 0 ? a.depth : 3;
+  if (depth > 12) throw InputError(fmt::format("--depth {}: must be 0-12", depth));
+  if (a.max_depth < 0 || a.max_depth > 12)
+    throw InputError(fmt::format("--max-depth {}: must be 0-12", a.max_depth));
+  if (a.tess < 1 || a.tess > 64) throw InputError(fmt::format("--tess {}: must be 1-64", a.tess));
+  int w = 1280, h = 720;
+  if (!a.resolution.empty()) parse_resolution(a.resolution, w, h);
+
+  Stopwatch sw;
+  const Mesh cage = read_mesh(mesh, parse_format_option(format, "--format"));
+  nlohmann::json timings = {{"read", sw.lap()}};
+  const SubdivOptions options = subdiv_options(cage);
+  Camera cam = frame_camera(cage, w, h);
+  if (!a.camera.empty()) cam = parse_camera(a.camera, cam);
+  const VertexErrorModel model = vertex_error_model(cage, options);
+  PatchOptions po;
+  po.subdiv = options;
+  po.depth = dynamic ? a.max_depth : depth;
+  std::vector<uint8_t> vdepth;
+  std::vector<float> estimate;
+  if (dynamic) {
+    DepthOptions d;
+    d.tolerance_px = a.tolerance;
+    d.max_depth = a.max_depth;
+    vdepth = select_depths(cage, model, cam, d, {}, {}, &estimate);
+  } else {
+    // The error the fixed depth leaves, as the same model estimates it for this camera.
+    DepthOptions d;
+    std::vector<uint8_t> pin(cage.vertex_count(), uint8_t(depth));
+    select_depths(cage, model, cam, d, {}, pin, &estimate);
+  }
+  timings["select"] = sw.lap();
+  PatchStats ps;
+  const PatchTable table = build_patches(cage, po, vdepth, &ps);
+  timings["isolate"] = ps.refine_ms;
+  timings["patches"] = ps.patches_ms;
+  sw.lap();
+  const std::vector<float> points = table.points(cage.positions);
+  timings["points"] = sw.lap();
+  TessellateOptions to;
+  to.factor = a.tess;
+  to.depth_colors = a.depth_colors;
+  const Mesh out = tessellate_patches(cage, table, points, to);
+  timings["tessellate"] = sw.lap();
+  write_mesh(out, out_path);
+  timings["write"] = sw.lap();
+
+  // Histogram of the depth of the irregular vertices (the ones that need any).
+  std::map<int, size_t> hist;
+  double worst_px = 0;
+  for (size_t v = 0; v < cage.vertex_count(); ++v) {
+    if (model.k[v] <= 0) continue;
+    ++hist[dynamic ? vdepth[v] : depth];
+    double x, y;
+    if (cam.project(&cage.positions[3 * v], x, y) && x >= 0 && y >= 0 && x <= w && y <= h)
+      worst_px = std::max(worst_px, double(estimate[v]));
+  }
+  const size_t nreg = table.regular_params.size(), ngreg = table.gregory_params.size();
+  if (json) {
+    nlohmann::json by_level = nlohmann::json::array();
+    for (size_t k = 0; k < ps.regular_by_level.size(); ++k)
+      by_level.push_back(
+          {{"level", k}, {"regular", ps.regular_by_level[k]}, {"gregory", ps.gregory_by_level[k]}});
+    nlohmann::json histogram = nlohmann::json::object();
+    for (const auto& [d, n] : hist) histogram[std::to_string(d)] = n;
+    size_t boundary = 0, transition = 0;
+    for (const auto* params : {&table.regular_params, &table.gregory_params})
+      for (const PatchParam& p : *params)
+        boundary += p.boundary != 0, transition += p.transition != 0;
+    nlohmann::json j = {
+        {"input", mesh},
+        {"output", out_path},
+        {"mode", dynamic ? "tolerance" : "depth"},
+        {"depth", dynamic ? a.max_depth : depth},
+        {"tolerance_px", dynamic ? nlohmann::json(a.tolerance) : nlohmann::json(nullptr)},
+        {"camera",
+         {{"eye", {cam.eye[0], cam.eye[1], cam.eye[2]}},
+          {"target", {cam.target[0], cam.target[1], cam.target[2]}},
+          {"fovy_deg", cam.fovy_deg},
+          {"resolution", {w, h}}}},
+        {"patches",
+         {{"total", nreg + ngreg},
+          {"regular", nreg},
+          {"gregory", ngreg},
+          {"boundary", boundary},
+          {"transition", transition},
+          {"by_level", by_level}}},
+        {"vertex_depth_histogram", histogram},
+        {"estimated_max_error_px", worst_px},
+        {"points", table.point_count()},
+        {"tess", a.tess},
+        {"output_vertices", out.vertex_count()},
+        {"output_faces", out.face_count()},
+        {"timings_ms", timings}};
+    fmt::print("{}\n", j.dump(2));
+  } else {
+    fmt::print(
+        "{} -> {}: {} patches ({} regular, {} end caps), {} triangles, estimated max "
+        "error {:.3g} px ({:.1f} ms)\n",
+        mesh, out_path, nreg + ngreg, nreg, ngreg, out.face_count(), worst_px, sw.ms());
+  }
+}
+
+}  // namespace
 
 void add_subdivide(CLI::App& app) {
   auto* cmd = app.add_subcommand("subdivide", "Catmull-Clark subdivision of a cage");
   struct Opts {
     std::string mesh, out, format;
     int uniform = -1;
-    bool limit = false, json = false;
+    bool limit = false, json = false, adaptive = false;
+    AdaptiveOpts a;
   };
   auto o = std::make_shared<Opts>();
   cmd->add_option("MESH", o->mesh, "Control cage (OBJ with OpenSubdiv tags, PLY, OFF)")->required();
   cmd->add_option("-o,--output", o->out, "Output mesh (.obj, .ply, .off, .glb)")->required();
-  cmd->add_option("--uniform", o->uniform, "Refine every face L times (0-8)")->required();
+  cmd->add_option("--uniform", o->uniform, "Refine every face L times (0-8)");
   cmd->add_flag("--limit", o->limit, "Push the points to the limit surface, with limit normals");
+  cmd->add_flag("--adaptive", o->adaptive,
+                "Feature-adaptive limit surface: patches, tessellated watertight");
+  cmd->add_option("--depth", o->a.depth,
+                  "--adaptive: isolation depth of every irregular vertex (0-12; default 3)");
+  cmd->add_option("--tolerance", o->a.tolerance,
+                  "--adaptive: screen error in pixels; picks a depth per vertex from the camera");
+  cmd->add_option("--max-depth", o->a.max_depth, "--adaptive --tolerance: deepest level (0-12)");
+  cmd->add_option("--camera", o->a.camera,
+                  "ex,ey,ez,tx,ty,tz,fovy_deg (default: frames the model from the front)");
+  cmd->add_option("--resolution", o->a.resolution, "Image size WxH for --tolerance (1280x720)");
+  cmd->add_option("--tess", o->a.tess, "--adaptive: segments per patch edge (1-64, default 4)");
+  cmd->add_flag("--depth-colors", o->a.depth_colors,
+                "--adaptive: colour vertices by the level of their patch");
   cmd->add_option("--format", o->format, "Input format, overriding the extension");
   cmd->add_flag("--json", o->json, "Print one JSON object with counts per level and timings");
-  cmd->callback([o] {
+  cmd->callback([o, cmd] {
+    const bool uniform = cmd->count("--uniform") > 0;
+    if (o->adaptive == uniform)
+      throw InputError("subdivide: give exactly one of --uniform L and --adaptive");
+    if (!o->adaptive)
+      for (const char* a : {"--depth", "--tolerance", "--max-depth", "--camera", "--resolution",
+                            "--tess", "--depth-colors"})
+        if (cmd->count(a)) throw InputError(fmt::format("{} goes with --adaptive", a));
+    if (o->adaptive) {
+      if (o->limit) throw InputError("--limit goes with --uniform (--adaptive is the limit)");
+      o->a.dynamic = cmd->count("--tolerance") > 0;
+      run_adaptive(o->mesh, o->out, o->format, o->a, o->json);
+      return;
+    }
     if (o->uniform < 0 || o->uniform > 8)
       throw InputError(fmt::format("--uniform {}: level must be 0-8", o->uniform));
     if (format_from_path(o->out) == MeshFormat::automatic)

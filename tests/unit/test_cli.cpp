@@ -11,6 +11,8 @@
 #include <sstream>
 
 #include "limn/mesh/io.hpp"
+#include "limn/mesh/topology.hpp"
+#include "limn/subdiv/patches.hpp"
 #include "limn/subdiv/refine.hpp"
 
 namespace limn {
@@ -273,6 +275,69 @@ TEST_F(Cli, SubdivideLeanWritesTheLastLevel) {
   const UniformRefinement ur = refine_uniform(m, 3, subdiv_options(m));
   EXPECT_EQ(s.positions, ur.positions(m, 3));
   EXPECT_EQ(j["output_faces"], s.face_count());
+}
+
+TEST_F(Cli, SubdivideAdaptiveWritesAWatertightLimitSurface) {
+  const fs::path cage = dir_ / "torus.obj", out = dir_ / "a.ply";
+  ASSERT_EQ(limn("shape torus -o " + q(cage)).code, 0);
+  const Mesh m = read_mesh(cage);
+  const Result r =
+      limn("subdivide " + q(cage) + " -o " + q(out) + " --adaptive --depth 2 --tess 3 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  PatchOptions po;
+  po.subdiv = subdiv_options(m);
+  po.depth = 2;
+  const PatchTable t = build_patches(m, po);
+  EXPECT_EQ(j["patches"]["total"], t.patch_count());
+  EXPECT_EQ(j["patches"]["regular"], t.regular_params.size());
+  EXPECT_EQ(j["patches"]["gregory"], t.gregory_params.size());
+  size_t by_level = 0;
+  for (const auto& l : j["patches"]["by_level"])
+    by_level += size_t(l["regular"]) + size_t(l["gregory"]);
+  EXPECT_EQ(by_level, t.patch_count());
+  const Mesh s = read_mesh(out);
+  EXPECT_EQ(j["output_faces"], s.face_count());
+  const MeshStats st = analyze(s, build_topology(s));
+  EXPECT_EQ(st.boundary_edges, 0u);  // the torus is closed, so its tessellation must be
+  EXPECT_EQ(st.non_manifold_edges, 0u);
+  EXPECT_TRUE(j["timings_ms"].contains("tessellate"));
+  EXPECT_TRUE(j["vertex_depth_histogram"].contains("2"));
+}
+
+TEST_F(Cli, SubdivideAdaptiveToleranceFollowsTheCamera) {
+  const fs::path cage = dir_ / "torus.obj";
+  ASSERT_EQ(limn("shape torus -o " + q(cage)).code, 0);
+  auto patches = [&](const std::string& camera) {
+    const Result r = limn("subdivide " + q(cage) + " -o " + q(dir_ / "d.ply") +
+                          " --adaptive --tolerance 1 --resolution 640x480 --depth-colors --json" +
+                          " --camera " + camera);
+    EXPECT_EQ(r.code, 0) << r.err;
+    const auto j = nlohmann::json::parse(r.out);
+    EXPECT_LE(double(j["estimated_max_error_px"]), 1.0);
+    return size_t(j["patches"]["total"]);
+  };
+  const size_t near = patches("0,2,2.5,0,0,0,45"), far = patches("0,8,10,0,0,0,45");
+  EXPECT_GT(near, far);
+  const Mesh s = read_mesh(dir_ / "d.ply");
+  EXPECT_EQ(s.colors.size(), 4 * s.vertex_count());
+}
+
+TEST_F(Cli, SubdivideAdaptiveRejectsBadOptions) {
+  const fs::path cage = dir_ / "cube.obj";
+  ASSERT_EQ(limn("shape cube -o " + q(cage)).code, 0);
+  for (const char* bad :
+       {"--adaptive --uniform 2", "--uniform 2 --tess 3", "--adaptive --tess 0",
+        "--adaptive --tess 65", "--adaptive --depth 13", "--adaptive --depth 2 --tolerance 1",
+        "--adaptive --tolerance 0", "--adaptive --tolerance -3", "--adaptive --camera 1,2,3",
+        "--adaptive --camera 0,0,5,0,0,0,200", "--adaptive --camera a,0,5,0,0,0,45",
+        "--adaptive --tolerance 1 --resolution 640", "--adaptive --tolerance 1 --resolution 0x10",
+        "--adaptive --limit", "--adaptive --max-depth 20"}) {
+    const Result r = limn("subdivide " + q(cage) + " -o " + q(dir_ / "x.ply") + " " + bad);
+    EXPECT_EQ(r.code, 2) << bad << ": " << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << bad << ": " << r.err;
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "x.ply"));
 }
 
 }  // namespace
