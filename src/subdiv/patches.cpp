@@ -71,8 +71,27 @@ struct Level {
     uint8_t depth = 0, rot = 0, corner = 0;
   };
   std::vector<Face> param;
-  // This level's faces and edges, which the next level's provenance refers to.
-  std::vector<uint32_t> face_offsets, face_vertices, edge_vertices;
+  // This level's faces and edges, which the next level's provenance refers to (refine_sparse
+  // keeps its levels in place: they are reserved up front).
+  const RefinedLevel* level = nullptr;
+  // Rings of the vertices asked for so far, flat: vertex v's faces are ring_face[ring_at[v] ..
+  // + ring_faces[v]), its edge ends ring_edge[ring_at[v] + i] (one more on a boundary).
+  std::vector<uint32_t> ring_at, ring_edge, ring_diag, ring_face;
+  std::vector<uint16_t> ring_faces;
+  std::vector<uint8_t> ring_flags;  // 1 boundary, 2 manifold, 4 all quads
+};
+
+// A cached ring.
+struct RingView {
+  const uint32_t *edge_end = nullptr, *diagonal = nullptr, *face = nullptr;
+  uint32_t faces = 0;
+  bool boundary = false, manifold = false, all_quads = false;
+  uint32_t edges() const { return faces + (boundary ? 1 : 0); }
+  int index_of(uint32_t f) const {
+    for (uint32_t i = 0; i < faces; ++i)
+      if (face[i] == f) return int(i);
+    return -1;
+  }
 };
 
 class Builder {
@@ -84,9 +103,9 @@ class Builder {
   void build(PatchTable& out, SparseRefinement& r, PatchStats* stats);
 
  private:
-  Ring ring(const Level& L, const RefinedLevel& R, uint32_t v) const;
+  RingView ring(Level& L, const RefinedLevel& R, uint32_t v) const;
   Ring span(const Level& L, const RefinedLevel& R, uint32_t corner, bool& sharp) const;
-  bool regular_vertex(const Level& L, const RefinedLevel& R, uint32_t v) const;
+  bool regular_vertex(Level& L, const RefinedLevel& R, uint32_t v) const;
   void aligned_corners(const Level& L, const RefinedLevel& R, uint32_t f, uint32_t c[4]) const;
 
   const Mesh& cage_;
@@ -96,42 +115,65 @@ class Builder {
   uint32_t ptex_count_ = 0;
 };
 
-Ring Builder::ring(const Level& L, const RefinedLevel& R, uint32_t v) const {
-  const Topology& t = L.topo;
-  const uint32_t* fv = R.face_vertices.data();
-  Ring g;
-  const uint32_t s0 = t.vertex_offsets[v], n = t.vertex_offsets[v + 1] - s0;
-  uint32_t start = n ? t.vertex_corners[s0] : kNone;
-  for (uint32_t i = 0; i < n; ++i) {
-    const uint32_t c = t.vertex_corners[s0 + i];
-    for (const uint32_t h : {c, t.corner_prev[c]}) {
-      const uint32_t tw = t.corner_twin[h];
-      if (tw == kNonManifold || (tw != kNone && fv[tw] == fv[h])) g.manifold = false;
+RingView Builder::ring(Level& L, const RefinedLevel& R, uint32_t v) const {
+  if (L.ring_at.empty()) {
+    L.ring_at.assign(R.vertex_count(), kNone);
+    L.ring_faces.assign(R.vertex_count(), 0);
+    L.ring_flags.assign(R.vertex_count(), 0);
+  }
+  if (L.ring_at[v] == kNone) {
+    const Topology& t = L.topo;
+    const uint32_t* fv = R.face_vertices.data();
+    const uint32_t s0 = t.vertex_offsets[v], n = t.vertex_offsets[v + 1] - s0;
+    bool boundary = false, manifold = n > 0, quads = true;
+    uint32_t start = n ? t.vertex_corners[s0] : kNone;
+    for (uint32_t i = 0; i < n; ++i) {
+      const uint32_t c = t.vertex_corners[s0 + i];
+      for (const uint32_t h : {c, t.corner_prev[c]}) {
+        const uint32_t tw = t.corner_twin[h];
+        if (tw == kNonManifold || (tw != kNone && fv[tw] == fv[h])) manifold = false;
+      }
+      if (t.corner_twin[c] == kNone && !boundary) start = c, boundary = true;
     }
-    if (t.corner_twin[c] == kNone && !g.boundary) start = c, g.boundary = true;
-  }
-  if (!g.manifold || n == 0) {
-    g.manifold = false;
-    return g;
-  }
-  uint32_t c = start;
-  for (uint32_t i = 0; i < n; ++i) {
-    const uint32_t f = t.corner_face[c];
-    const uint32_t size = R.face_offsets[f + 1] - R.face_offsets[f];
-    g.all_quads = g.all_quads && size == 4;
-    g.edge_end.push_back(fv[t.corner_next[c]]);
-    g.diagonal.push_back(fv[t.corner_next[t.corner_next[c]]]);
-    g.face.push_back(f);
-    const uint32_t in = t.corner_prev[c];
-    const uint32_t tw = t.corner_twin[in];
-    if (tw == kNone) {
-      g.edge_end.push_back(fv[in]);
-      break;
+    const uint32_t at = uint32_t(L.ring_face.size());
+    uint32_t faces = 0;
+    if (manifold) {
+      uint32_t c = start;
+      for (uint32_t i = 0; i < n; ++i) {
+        const uint32_t f = t.corner_face[c];
+        quads = quads && R.face_offsets[f + 1] - R.face_offsets[f] == 4;
+        L.ring_edge.push_back(fv[t.corner_next[c]]);
+        L.ring_diag.push_back(fv[t.corner_next[t.corner_next[c]]]);
+        L.ring_face.push_back(f);
+        ++faces;
+        const uint32_t in = t.corner_prev[c];
+        const uint32_t tw = t.corner_twin[in];
+        if (tw == kNone) {
+          L.ring_edge.push_back(fv[in]);
+          break;
+        }
+        if (tw == start || tw >= kNonManifold) break;
+        c = tw;
+      }
+      if (faces != n) manifold = false;  // faces in more than one fan
     }
-    if (tw == start || tw >= kNonManifold) break;
-    c = tw;
+    // Keep the three arrays in step (a boundary ring has one edge more than faces).
+    while (L.ring_diag.size() < L.ring_edge.size()) L.ring_diag.push_back(kNone);
+    while (L.ring_face.size() < L.ring_edge.size()) L.ring_face.push_back(kNone);
+    L.ring_at[v] = at;
+    L.ring_faces[v] = uint16_t(std::min<uint32_t>(faces, 0xFFFF));
+    L.ring_flags[v] =
+        uint8_t((boundary ? 1 : 0) | (manifold && faces <= 0xFFFF ? 2 : 0) | (quads ? 4 : 0));
   }
-  if (g.face.size() != n) g.manifold = false;  // faces in more than one fan
+  RingView g;
+  const uint32_t at = L.ring_at[v];
+  g.edge_end = L.ring_edge.data() + at;
+  g.diagonal = L.ring_diag.data() + at;
+  g.face = L.ring_face.data() + at;
+  g.faces = L.ring_faces[v];
+  g.boundary = L.ring_flags[v] & 1;
+  g.manifold = L.ring_flags[v] & 2;
+  g.all_quads = L.ring_flags[v] & 4;
   return g;
 }
 
@@ -182,9 +224,9 @@ Ring Builder::span(const Level& L, const RefinedLevel& R, uint32_t corner, bool&
 // Regular: the limit surface around the vertex is the B-spline of its ring (interior valence 4,
 // regular boundary with two faces, corner with one face under the corner rule), with no sharp
 // feature of its own.
-bool Builder::regular_vertex(const Level& L, const RefinedLevel& R, uint32_t v) const {
+bool Builder::regular_vertex(Level& L, const RefinedLevel& R, uint32_t v) const {
   const Topology& t = L.topo;
-  const Ring g = ring(L, R, v);
+  const RingView g = ring(L, R, v);
   if (!g.manifold || !g.all_quads) return false;
   for (uint32_t i = t.vertex_offsets[v]; i < t.vertex_offsets[v + 1]; ++i) {
     const uint32_t c = t.vertex_corners[i];
@@ -192,7 +234,7 @@ bool Builder::regular_vertex(const Level& L, const RefinedLevel& R, uint32_t v) 
       if (t.corner_twin[h] != kNone && L.corner_sharpness[h] > 0.0f) return false;
   }
   const float vs = R.vertex_sharpness[v];
-  const size_t nf = g.face.size();
+  const size_t nf = g.faces;
   if (!g.boundary) return nf == 4 && vs == 0.0f;
   if (nf == 2) return vs == 0.0f;
   return nf == 1 && vs >= kInf;
@@ -246,13 +288,13 @@ void Builder::request(size_t k, const SparseLevel& S, std::vector<uint8_t>& requ
     size_t i = 0;
     for (uint32_t f : S.parent_faces) {
       int d = 0;
-      for (uint32_t c = P.face_offsets[f]; c < P.face_offsets[f + 1]; ++c)
-        d = std::max<int>(d, P.rem[P.face_vertices[c]]);
+      for (uint32_t c = P.level->face_offsets[f]; c < P.level->face_offsets[f + 1]; ++c)
+        d = std::max<int>(d, P.rem[P.level->face_vertices[c]]);
       L.rem[i++] = dec(d);
     }
     for (uint32_t e : S.parent_edges)
-      L.rem[i++] = dec(std::max(P.rem[P.edge_vertices[2 * size_t(e)]],
-                                P.rem[P.edge_vertices[2 * size_t(e) + 1]]));
+      L.rem[i++] = dec(std::max(P.rem[P.level->edge_vertices[2 * size_t(e)]],
+                                P.rem[P.level->edge_vertices[2 * size_t(e) + 1]]));
     for (uint32_t v : S.parent_vertices) L.rem[i++] = dec(P.rem[v]);
   }
 
@@ -280,7 +322,7 @@ void Builder::request(size_t k, const SparseLevel& S, std::vector<uint8_t>& requ
       const Level::Face& pp = P.param[pf];
       Level::Face& cp = L.param[f];
       cp.base = pp.base;
-      if (k == 1 && P.face_offsets[pf + 1] - P.face_offsets[pf] != 4) {
+      if (k == 1 && P.level->face_offsets[pf + 1] - P.level->face_offsets[pf] != 4) {
         cp.ptex = pp.ptex + child;  // a non-quad's corner quad is a ptex face of its own
         cp.corner = uint8_t(child);
         cp.rot = 0;
@@ -318,9 +360,7 @@ void Builder::request(size_t k, const SparseLevel& S, std::vector<uint8_t>& requ
     L.requested[f] = want && k < size_t(kMaxDepth);
     requested[f] = L.requested[f];
   }
-  L.face_offsets = R.face_offsets;
-  L.face_vertices = R.face_vertices;
-  L.edge_vertices = R.edge_vertices;
+  L.level = &R;
 }
 
 // Gregory end-cap points of one quad (OpenSubdiv's GregoryConverter; see the file comment).
@@ -533,7 +573,7 @@ void Builder::build(PatchTable& out, SparseRefinement& r, PatchStats* stats) {
   static constexpr int kD1[4][2] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}};  // towards corner i + 1
   static constexpr int kD2[4][2] = {{0, 1}, {-1, 0}, {0, -1}, {1, 0}};  // towards corner i - 1
   for (size_t k = 0; k < r.levels.size(); ++k) {
-    const Level& L = levels_[k];
+    Level& L = levels_[k];
     const RefinedLevel& R = r.levels[k].level;
     const Topology& t = L.topo;
     const uint32_t off = out.level_offsets[k];
@@ -561,13 +601,12 @@ void Builder::build(PatchTable& out, SparseRefinement& r, PatchStats* stats) {
         }
       }
       if (regular) {
-        Ring rings[4];
+        RingView rings[4];
         int in_ring[4];
         for (int i = 0; i < 4; ++i) {
           rings[i] = ring(L, R, a[i]);
-          const auto it = std::find(rings[i].face.begin(), rings[i].face.end(), f);
-          if (it == rings[i].face.end()) throw std::logic_error("patches: face missing in ring");
-          in_ring[i] = int(it - rings[i].face.begin());
+          in_ring[i] = rings[i].index_of(f);
+          if (in_ring[i] < 0) throw std::logic_error("patches: face missing in ring");
         }
         pp.type = PatchType::regular;
         uint32_t grid[16];
@@ -577,18 +616,18 @@ void Builder::build(PatchTable& out, SparseRefinement& r, PatchStats* stats) {
           have[4 * y + x] = true;
         };
         for (int i = 0; i < 4; ++i) {
-          const Ring& g = rings[i];
+          const RingView& g = rings[i];
           const size_t j = size_t(in_ring[i]);
           const int x = kPos[i][0], y = kPos[i][1];
           const int* d1 = kD1[i];
           const int* d2 = kD2[i];
           auto edge = [&](size_t m, int px, int py) {
             const size_t id = (j + m) % 4;
-            if (id < g.edge_end.size()) put(px, py, g.edge_end[id]);
+            if (id < g.edges()) put(px, py, g.edge_end[id]);
           };
           auto diag = [&](size_t m, int px, int py) {
             const size_t id = (j + m) % 4;
-            if (id < g.face.size()) put(px, py, g.diagonal[id]);
+            if (id < g.faces) put(px, py, g.diagonal[id]);
           };
           put(x, y, a[i]);
           edge(2, x - d1[0], y - d1[1]);
