@@ -81,7 +81,7 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i)
     if (!std::strcmp(argv[i], "--seeds") && i + 1 < argc) seeds = std::atoi(argv[++i]);
   std::map<int, double> worst;  // 1 = smooth extraordinary, 0 = other features
-  for (int n : {3, 5, 6, 7, 8, 10, 12}) {
+  for (int n : {3, 5, 6, 7, 8, 9, 10, 11, 12}) {
     std::map<int, double> w;
     for (int s = 0; s < seeds; ++s) {
       g_state = uint64_t(n * 1000 + s);

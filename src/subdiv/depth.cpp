@@ -19,13 +19,14 @@ double dot3(const double a[3], const double b[3]) {
 
 // c_n of K_v = c_n D_v for smooth interior extraordinary vertices (index n - 3, n >= 12 use
 // the last), and c for every other irregular vertex (creases, corners, boundaries,
-// non-manifold, next to non-quads). Measured by build/bench/limn_calibrate_depth --seeds 4
+// non-manifold, next to non-quads). Measured by build/bench/limn_calibrate_depth --seeds 8
 // (2026-12-01): the largest ratio of the end-cap error (at equal parameters, against a
-// reference at depth 12) to D_v r^d over random tori at depths 1-6 was flat in d and rose with
-// the valence: 0.052 (n = 3), 0.051 (5), 0.093 (6), 0.105 (7), 0.199 (8), 0.145 (10), 0.200 (12);
-// 0.52 on the crease cage. The constants are the running maximum over n times 1.5.
-constexpr double kSmooth[10] = {0.08, 0.08, 0.08, 0.14, 0.16, 0.30, 0.30, 0.30, 0.30, 0.30};
-constexpr double kOther = 0.78;
+// reference at depth 12) to D_v r^d over random tori at depths 1-6 was flat in d: 0.052
+// (n = 3), 0.051 (5), 0.093 (6), 0.105 (7), 0.207 (8), 0.120 (9), 0.145 (10, 11), 0.200 (12);
+// 0.52 on the crease cage. The constants are those times 1.25, and at least 0.25 from n = 8 up
+// (the spread there says the samples are few).
+constexpr double kSmooth[10] = {0.065, 0.065, 0.065, 0.12, 0.13, 0.26, 0.25, 0.25, 0.25, 0.25};
+constexpr double kOther = 0.65;
 
 }  // namespace
 
@@ -229,19 +230,28 @@ std::vector<uint8_t> select_depths(const Mesh& cage, const VertexErrorModel& mod
     if (!overrides.empty() && overrides[v] != 255) {
       d[v] = std::min<uint8_t>(overrides[v], 12);
     } else if (model.k[v] > 0) {
-      const double s = camera.scale_at(&cage.positions[3 * v], model.radius[v]);
-      const double need =
-          std::log(double(model.k[v]) * s / o.tolerance_px) / std::log(1.0 / double(model.mu[v]));
-      int depth = int(std::ceil(std::max(need, 0.0) - 1e-9));
+      // The error left at depth d lies in the end caps, within radius * r^d of v (the ring
+      // shrinks by at most r per level): take the scale there, and the shallowest d that is
+      // enough for its own region.
+      const double r = double(model.mu[v]), k = double(model.k[v]);
+      auto need_at = [&](int depth) {
+        const double reach = model.radius[v] * std::pow(r, std::max(depth, 0));
+        const double s = camera.scale_at(&cage.positions[3 * v], reach);
+        return std::log(k * s / o.tolerance_px) / std::log(1.0 / r);
+      };
+      int depth = 0;
+      double need = need_at(0);
+      while (depth < 12 && need > depth + 1e-9) need = need_at(++depth);
       // Hysteresis: hold a deeper previous depth until the need falls clearly below it.
       if (!previous.empty() && previous[v] > depth && need > previous[v] - 1 - o.hysteresis)
         depth = previous[v];
       d[v] = uint8_t(std::clamp(depth, o.min_depth, o.max_depth));
     }
-    if (estimate_px && model.k[v] > 0)
-      (*estimate_px)[v] =
-          float(model.k[v] * camera.scale_at(&cage.positions[3 * v], model.radius[v]) *
-                std::pow(double(model.mu[v]), d[v]));
+    if (estimate_px && model.k[v] > 0) {
+      const double reach = model.radius[v] * std::pow(double(model.mu[v]), d[v]);
+      (*estimate_px)[v] = float(model.k[v] * camera.scale_at(&cage.positions[3 * v], reach) *
+                                std::pow(double(model.mu[v]), d[v]));
+    }
   }
   return d;
 }

@@ -1,0 +1,115 @@
+// Patches at equal screen error: view-dependent depth per vertex (limn select_depths, tolerance
+// 0.5 px) vs the fixed depth (classic FAS / OpenSubdiv's isolation level) needed for the same
+// measured error, over a camera path (near, mid, far) on the FAS cages. The error is measured:
+// 3 x 3 samples on every patch, against a reference table of depth 10 (regular patches are
+// exact, its end caps are 2^-10 of a face), in pixels at the sample (visible samples only).
+//   limn_bench_adaptive_depth [--tolerance PX] [--resolution WxH]
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+
+#include "limn/mesh/io.hpp"
+#include "limn/subdiv/depth.hpp"
+#include "limn/subdiv/patches.hpp"
+
+using namespace limn;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Reference {
+  PatchTable table;
+  std::vector<float> points;
+};
+
+double measured_error(const Mesh& cage, const PatchTable& t, const Reference& ref,
+                      const Camera& cam) {
+  const std::vector<float> pts = t.points(cage.positions);
+  const PatchMap map(ref.table);
+  std::vector<PatchCoord> a, b;
+  const size_t nr = t.regular_params.size();
+  for (uint32_t i = 0; i < t.patch_count(); ++i) {
+    const PatchParam& p = i < nr ? t.regular_params[i] : t.gregory_params[i - nr];
+    const double size = 1.0 / double(1u << p.depth);
+    for (double s : {0.1, 0.5, 0.9})
+      for (double u : {0.1, 0.5, 0.9}) {
+        a.push_back({i, float(s), float(u)});
+        b.push_back(map.find(p.ptex, (p.u + s) * size, (p.v + u) * size));
+      }
+  }
+  std::vector<float> pa(3 * a.size()), pb(3 * b.size());
+  evaluate_patches(t, pts, a, pa.data());
+  evaluate_patches(ref.table, ref.points, b, pb.data());
+  double worst = 0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    double x, y;
+    if (!cam.project(&pb[3 * i], x, y) || x < 0 || y < 0 || x > cam.width || y > cam.height)
+      continue;
+    const double d = std::hypot(pa[3 * i] - pb[3 * i], pa[3 * i + 1] - pb[3 * i + 1],
+                                pa[3 * i + 2] - pb[3 * i + 2]);
+    worst = std::max(worst, d * cam.scale_at(&pb[3 * i]));
+  }
+  return worst;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  float tolerance = 0.5f;
+  int w = 1920, h = 1080;
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--tolerance") && i + 1 < argc)
+      tolerance = float(std::atof(argv[++i]));
+    if (!std::strcmp(argv[i], "--resolution") && i + 1 < argc)
+      std::sscanf(argv[++i], "%dx%d", &w, &h);
+  }
+  const fs::path models = LIMN_SHARED_MODELS;
+  fmt::print("{:<16} {:>6} {:>10} {:>11} {:>9} {:>11} {:>11} {:>9} {:>8}\n", "model", "camera",
+             "dyn_patch", "dyn_err_px", "fixed_L", "fixed_patch", "fixed_err", "fewer", "sel_ms");
+  for (const char* name : {"quads/bigguy.obj", "quads/monsterfrog.obj"}) {
+    const Mesh cage = read_mesh(models / name);
+    PatchOptions po;
+    po.subdiv = subdiv_options(cage);
+    po.depth = 10;
+    Reference ref{build_patches(cage, po), {}};
+    ref.points = ref.table.points(cage.positions);
+    const VertexErrorModel model = vertex_error_model(cage, po.subdiv);
+    const Camera framed = frame_camera(cage, w, h);
+    const std::pair<const char*, float> path[] = {{"near", 0.35f}, {"mid", 1.0f}, {"far", 3.0f}};
+    for (const auto& [label, zoom] : path) {
+      Camera cam = framed;
+      for (int k = 0; k < 3; ++k)
+        cam.eye[k] = cam.target[k] + zoom * (framed.eye[k] - framed.target[k]);
+      DepthOptions d;
+      d.tolerance_px = tolerance;
+      d.max_depth = 10;
+      const auto t0 = std::chrono::steady_clock::now();
+      const std::vector<uint8_t> depth = select_depths(cage, model, cam, d);
+      const double sel_ms =
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      po.depth = 10;
+      const PatchTable dyn = build_patches(cage, po, depth);
+      const double dyn_err = measured_error(cage, dyn, ref, cam);
+      // The shallowest fixed depth whose measured error is no larger.
+      int L = 0;
+      size_t fixed_patches = 0;
+      double fixed_err = 0;
+      for (L = 0; L <= 10; ++L) {
+        po.depth = L;
+        const PatchTable f = build_patches(cage, po);
+        fixed_err = measured_error(cage, f, ref, cam);
+        fixed_patches = f.patch_count();
+        if (fixed_err <= dyn_err) break;
+      }
+      fmt::print("{:<16} {:>6} {:>10} {:>11.3f} {:>9} {:>11} {:>11.3f} {:>8.0f}% {:>8.3f}\n",
+                 fs::path(name).filename().string(), label, dyn.patch_count(), dyn_err, L,
+                 fixed_patches, fixed_err,
+                 100.0 * (1.0 - double(dyn.patch_count()) / double(fixed_patches)), sel_ms);
+      std::fflush(stdout);
+    }
+  }
+}
