@@ -1,0 +1,183 @@
+// Limit-surface evaluation throughput: points per second on a 9 x 9 grid of every face, limn
+// (PatchMap + evaluate_patches on its patch table, 1 and 2 threads) beside OpenSubdiv 3.5's two
+// CPU paths in one run: Far (adaptive PatchTable with Gregory-basis end caps: PatchMap +
+// EvaluateBasis + the weighted sums) and Bfr (RefinerSurfaceFactory: one Surface per face,
+// PreparePatchPoints, Evaluate). Positions and first derivatives; each side's point preparation
+// (refined and end-cap points) is timed with it. Cages of quads only, isolation depth 3 for limn
+// and Far, Bfr at its defaults. Medians of 3.
+//   limn_bench_patch_eval [--grid N]
+#include <fmt/format.h>
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+#include <filesystem>
+#include <memory>
+
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wshadow"
+#pragma GCC diagnostic ignored "-Wconversion"
+#pragma GCC diagnostic ignored "-Wunused-parameter"
+#include <opensubdiv/bfr/refinerSurfaceFactory.h>
+#include <opensubdiv/bfr/surface.h>
+#include <opensubdiv/far/patchMap.h>
+#include <opensubdiv/far/patchTableFactory.h>
+#include <opensubdiv/far/primvarRefiner.h>
+#include <opensubdiv/far/topologyDescriptor.h>
+#pragma GCC diagnostic pop
+
+#include "limn/mesh/io.hpp"
+#include "limn/subdiv/patches.hpp"
+
+using namespace OpenSubdiv;
+namespace fs = std::filesystem;
+
+namespace {
+
+double now_ms() {
+  return std::chrono::duration<double, std::milli>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+template <class F>
+double median_ms(F&& f) {
+  std::vector<double> t;
+  for (int i = 0; i < 3; ++i) {
+    const double t0 = now_ms();
+    f();
+    t.push_back(now_ms() - t0);
+  }
+  std::sort(t.begin(), t.end());
+  return t[1];
+}
+
+struct P3 {
+  float x = 0, y = 0, z = 0;
+  void Clear(void* = nullptr) { x = y = z = 0; }
+  void AddWithWeight(const P3& p, float w) { x += w * p.x, y += w * p.y, z += w * p.z; }
+};
+
+std::unique_ptr<Far::TopologyRefiner> refiner(const limn::Mesh& m) {
+  static std::vector<int> nvpf, idx;
+  nvpf.clear();
+  for (size_t f = 0; f < m.face_count(); ++f) nvpf.push_back(int(m.face_size(f)));
+  idx.assign(m.face_vertices.begin(), m.face_vertices.end());
+  Far::TopologyDescriptor d;
+  d.numVertices = int(m.vertex_count());
+  d.numFaces = int(m.face_count());
+  d.numVertsPerFace = nvpf.data();
+  d.vertIndicesPerFace = idx.data();
+  Sdc::Options so;
+  so.SetVtxBoundaryInterpolation(Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER);
+  using Factory = Far::TopologyRefinerFactory<Far::TopologyDescriptor>;
+  return std::unique_ptr<Far::TopologyRefiner>(
+      Factory::Create(d, Factory::Options(Sdc::SCHEME_CATMARK, so)));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int grid = 9;
+  for (int i = 1; i < argc; ++i)
+    if (!std::strcmp(argv[i], "--grid") && i + 1 < argc) grid = std::max(2, std::atoi(argv[++i]));
+  const int depth = 3;
+  const fs::path models = LIMN_SHARED_MODELS;
+  fmt::print("{:<16} {:>9} {:>10} {:>10} {:>10} {:>10} {:>9} {:>9} {:>9}\n", "model", "points",
+             "limn1t_ms", "limn2t_ms", "far_ms", "bfr_ms", "far/limn", "bfr/limn", "bfr/l2t");
+  for (const char* name : {"quads/bigguy.obj", "quads/monsterfrog.obj"}) {
+    const limn::Mesh cage = limn::read_mesh(models / name);
+    std::vector<float> uv;
+    for (int j = 0; j < grid; ++j)
+      for (int i = 0; i < grid; ++i)
+        uv.push_back(float(i) / float(grid - 1)), uv.push_back(float(j) / float(grid - 1));
+    const size_t nf = cage.face_count(), per = uv.size() / 2, total = nf * per;
+    std::vector<float> out(3 * total), du(3 * total), dv(3 * total);
+
+    // limn: the table is built once (preprocessing is benchmarked elsewhere).
+    limn::PatchOptions po;
+    po.subdiv = limn::subdiv_options(cage);
+    po.depth = depth;
+    const limn::PatchTable table = limn::build_patches(cage, po);
+    const limn::PatchMap map(table);
+    std::vector<limn::PatchCoord> coords(total);
+    auto limn_run = [&] {
+      const std::vector<float> pts = table.points(cage.positions);
+      for (size_t f = 0; f < nf; ++f)
+        for (size_t k = 0; k < per; ++k)
+          coords[f * per + k] = map.find(uint32_t(f), uv[2 * k], uv[2 * k + 1]);
+      limn::evaluate_patches(table, pts, coords, out.data(), du.data(), dv.data());
+    };
+    double limn1, limn2;
+    {
+      tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+      limn1 = median_ms(limn_run);
+    }
+    limn2 = median_ms(limn_run);
+
+    // Far.
+    auto far_refiner = refiner(cage);
+    Far::TopologyRefiner::AdaptiveOptions ao(depth);
+    far_refiner->RefineAdaptive(ao);
+    Far::PatchTableFactory::Options fo(depth);
+    fo.SetEndCapType(Far::PatchTableFactory::Options::ENDCAP_GREGORY_BASIS);
+    std::unique_ptr<Far::PatchTable> pt(Far::PatchTableFactory::Create(*far_refiner, fo));
+    const Far::PatchMap far_map(*pt);
+    const int nrefined = far_refiner->GetNumVerticesTotal();
+    std::vector<P3> verts(size_t(nrefined + pt->GetNumLocalPoints()));
+    tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+    const double far_ms = median_ms([&] {
+      for (size_t v = 0; v < cage.vertex_count(); ++v)
+        verts[v] = {cage.positions[3 * v], cage.positions[3 * v + 1], cage.positions[3 * v + 2]};
+      const Far::PrimvarRefiner pr(*far_refiner);
+      P3* src = verts.data();
+      for (int k = 1; k <= far_refiner->GetMaxLevel(); ++k) {
+        P3* dst = src + far_refiner->GetLevel(k - 1).GetNumVertices();
+        pr.Interpolate(k, src, dst);
+        src = dst;
+      }
+      if (pt->GetNumLocalPoints())
+        pt->ComputeLocalPointValues(verts.data(), verts.data() + nrefined);
+      float wp[20], wu[20], wv[20];
+      for (size_t f = 0; f < nf; ++f)
+        for (size_t k = 0; k < per; ++k) {
+          const auto* h = far_map.FindPatch(int(f), uv[2 * k], uv[2 * k + 1]);
+          pt->EvaluateBasis(*h, uv[2 * k], uv[2 * k + 1], wp, wu, wv);
+          const auto cvs = pt->GetPatchVertices(*h);
+          P3 p, a, b;
+          for (int i = 0; i < cvs.size(); ++i) {
+            p.AddWithWeight(verts[size_t(cvs[i])], wp[i]);
+            a.AddWithWeight(verts[size_t(cvs[i])], wu[i]);
+            b.AddWithWeight(verts[size_t(cvs[i])], wv[i]);
+          }
+          const size_t o = 3 * (f * per + k);
+          out[o] = p.x, out[o + 1] = p.y, out[o + 2] = p.z;
+          du[o] = a.x, dv[o] = b.x;
+        }
+    });
+
+    // Bfr.
+    auto bfr_refiner = refiner(cage);
+    const Bfr::RefinerSurfaceFactory<> factory(*bfr_refiner);
+    const double bfr_ms = median_ms([&] {
+      Bfr::Surface<float> surface;
+      std::vector<float> patch_points;
+      const Bfr::Surface<float>::PointDescriptor desc(3);
+      for (size_t f = 0; f < nf; ++f) {
+        if (!factory.InitVertexSurface(int(f), &surface)) continue;
+        patch_points.resize(3 * size_t(surface.GetNumPatchPoints()));
+        surface.PreparePatchPoints(cage.positions.data(), desc, patch_points.data(), desc);
+        for (size_t k = 0; k < per; ++k) {
+          const size_t o = 3 * (f * per + k);
+          surface.Evaluate(&uv[2 * k], patch_points.data(), desc, &out[o], &du[o], &dv[o]);
+        }
+      }
+    });
+    fmt::print(
+        "{:<16} {:>9} {:>10.2f} {:>10.2f} {:>10.2f} {:>10.2f} {:>8.2f}x {:>8.2f}x {:>8.2f}x\n",
+        fs::path(name).filename().string(), total, limn1, limn2, far_ms, bfr_ms, far_ms / limn1,
+        bfr_ms / limn1, bfr_ms / limn2);
+    std::fflush(stdout);
+  }
+}
