@@ -141,6 +141,7 @@ int main(int argc, char** argv) {
         limn::PatchOptions opt;
         opt.subdiv = limn::subdiv_options(m);
         opt.depth = depth;
+        opt.inf_sharp_patches = false;  // like the OpenSubdiv side
         const double t0 = now_ms();
         const limn::PatchTable t = limn::build_patches(m, opt);
         tl.push_back(now_ms() - t0);

@@ -105,7 +105,15 @@ class Builder {
  private:
   RingView ring(Level& L, const RefinedLevel& R, uint32_t v) const;
   Ring span(const Level& L, const RefinedLevel& R, uint32_t corner, bool& sharp) const;
+  struct SharpEdges {
+    int inf = 0, semi = 0;  // infinitely sharp (boundary ones included) and semi-sharp edges
+    bool boundary = false;
+    uint32_t faces = 0;
+  };
+  SharpEdges sharp_edges(const Level& L, uint32_t v) const;
+  bool cuts_at_inf_sharp(const Level& L, const RefinedLevel& R, uint32_t v) const;
   bool regular_vertex(Level& L, const RefinedLevel& R, uint32_t v) const;
+  bool regular_vertex_inf(Level& L, const RefinedLevel& R, uint32_t v) const;
   void aligned_corners(const Level& L, const RefinedLevel& R, uint32_t f, uint32_t c[4]) const;
 
   const Mesh& cage_;
@@ -177,19 +185,52 @@ RingView Builder::ring(Level& L, const RefinedLevel& R, uint32_t v) const {
   return g;
 }
 
-// The fan of faces around a patch corner that an end cap sees (OpenSubdiv's corner spans with
-// its default options, infinitely sharp features approximated as smooth): the whole ring, or,
-// when non-manifold edges cut it, the faces between the cuts that hold the patch face, as a
-// boundary. `corner` is the patch face's corner at the vertex. `sharp`: the end cap
-// interpolates the vertex (a one-face boundary vertex, OpenSubdiv's sharp and legacy corners).
+Builder::SharpEdges Builder::sharp_edges(const Level& L, uint32_t v) const {
+  const Topology& t = L.topo;
+  SharpEdges e;
+  e.faces = t.vertex_offsets[v + 1] - t.vertex_offsets[v];
+  for (uint32_t i = t.vertex_offsets[v]; i < t.vertex_offsets[v + 1]; ++i) {
+    const uint32_t c = t.vertex_corners[i];
+    for (const uint32_t h : {c, t.corner_prev[c]}) {
+      // Each interior edge is seen from both of its faces; count it once.
+      const uint32_t tw = t.corner_twin[h];
+      if (tw == kNone) e.boundary = true;
+      if (!(tw >= kNonManifold || h == c)) continue;
+      const float x = L.corner_sharpness[h];
+      if (x >= kInf)
+        ++e.inf;
+      else if (x > 0.0f)
+        ++e.semi;
+    }
+  }
+  return e;
+}
+
+// With infinitely sharp patches, whether the vertex's spans are cut at its infinitely sharp
+// edges (OpenSubdiv: the vertex has such edges and is not a dart).
+bool Builder::cuts_at_inf_sharp(const Level& L, const RefinedLevel& R, uint32_t v) const {
+  if (!o_.inf_sharp_patches) return false;
+  const SharpEdges e = sharp_edges(L, v);
+  const bool dart = !e.boundary && e.inf + e.semi == 1 && R.vertex_sharpness[v] == 0.0f;
+  return e.inf > 0 && !dart;
+}
+
+// The fan of faces around a patch corner that a patch sees (OpenSubdiv's corner spans): the
+// whole ring, or, when non-manifold edges (or, with infinitely sharp patches, infinitely sharp
+// edges) cut it, the faces between the cuts that hold the patch face, as a boundary. `corner` is
+// the patch face's corner at the vertex. `sharp`: an end cap interpolates the vertex (with
+// infinitely sharp features approximated as smooth: a one-face boundary vertex, OpenSubdiv's
+// sharp and legacy corners; with infinitely sharp patches also corners of sharp edges and
+// infinitely sharp vertices).
 Ring Builder::span(const Level& L, const RefinedLevel& R, uint32_t corner, bool& sharp) const {
   const Topology& t = L.topo;
   const uint32_t* fv = R.face_vertices.data();
   const uint32_t v = fv[corner];
   const uint32_t n = t.vertex_offsets[v + 1] - t.vertex_offsets[v];
+  const bool cut_sharp = cuts_at_inf_sharp(L, R, v);
   auto cut = [&](uint32_t h) {
     const uint32_t tw = t.corner_twin[h];
-    return tw >= kNonManifold || fv[tw] == fv[h];
+    return tw >= kNonManifold || fv[tw] == fv[h] || (cut_sharp && L.corner_sharpness[h] >= kInf);
   };
   // Back up to the leading cut (or all the way round).
   uint32_t start = corner;
@@ -216,8 +257,29 @@ Ring Builder::span(const Level& L, const RefinedLevel& R, uint32_t corner, bool&
     c = t.corner_twin[in];
     if (c == start) break;
   }
-  g.manifold = g.face.size() == n;
-  sharp = g.boundary && g.face.size() == 1;
+  g.manifold = g.face.size() == n || g.boundary;
+  const bool fan = g.face.size() == n;  // the span is the vertex's only fan
+  bool manifold_vertex = fan;
+  if (!fan) {  // one fan cut by boundaries or sharp edges, or several fans (non-manifold)?
+    manifold_vertex = true;
+    for (uint32_t i = t.vertex_offsets[v]; i < t.vertex_offsets[v + 1]; ++i) {
+      const uint32_t h = t.vertex_corners[i];
+      for (const uint32_t x : {h, t.corner_prev[h]}) {
+        const uint32_t tw = t.corner_twin[x];
+        if (tw == kNonManifold || (tw < kNonManifold && fv[tw] == fv[x])) manifold_vertex = false;
+      }
+    }
+  }
+  if (!o_.inf_sharp_patches || !manifold_vertex) {
+    sharp = g.boundary && g.face.size() == 1;
+  } else {
+    const SharpEdges e = sharp_edges(L, v);
+    const float vs = R.vertex_sharpness[v];
+    const bool corner_tag = n == 1 && vs >= kInf;
+    const bool crease = e.inf == 2 && vs < kInf;
+    sharp = corner_tag || (cut_sharp ? !crease : vs >= kInf);
+    if (!sharp && e.boundary && n == 1) sharp = true;  // OpenSubdiv's legacy smooth corner
+  }
   return g;
 }
 
@@ -238,6 +300,26 @@ bool Builder::regular_vertex(Level& L, const RefinedLevel& R, uint32_t v) const 
   if (!g.boundary) return nf == 4 && vs == 0.0f;
   if (nf == 2) return vs == 0.0f;
   return nf == 1 && vs >= kInf;
+}
+
+// With infinitely sharp patches: regular when every span between infinitely sharp (or boundary)
+// edges is a regular boundary (two faces, crease rule) or a regular corner (one face, corner
+// rule), with nothing semi-sharp.
+bool Builder::regular_vertex_inf(Level& L, const RefinedLevel& R, uint32_t v) const {
+  const Topology& t = L.topo;
+  const RingView g = ring(L, R, v);
+  if (!g.manifold || !g.all_quads) return false;
+  const SharpEdges e = sharp_edges(L, v);
+  const float vs = R.vertex_sharpness[v];
+  if (e.semi > 0 || (vs > 0.0f && vs < kInf)) return false;
+  if (e.inf == 0) return g.faces == 4 && vs == 0.0f;
+  if (!cuts_at_inf_sharp(L, R, v)) return false;  // a dart
+  const size_t want = vs >= kInf || e.inf >= 3 ? 1 : 2;
+  for (uint32_t i = t.vertex_offsets[v]; i < t.vertex_offsets[v + 1]; ++i) {
+    bool sharp = false;
+    if (span(L, R, t.vertex_corners[i], sharp).face.size() != want) return false;
+  }
+  return true;
 }
 
 // The four corners of quad f in ptex order (corner s at ptex square corner s).
@@ -348,7 +430,9 @@ void Builder::request(size_t k, const SparseLevel& S, std::vector<uint8_t>& requ
     bool want = e - b != 4 && k == 0;  // non-quads: always once
     for (uint32_t c = b; c < e; ++c) {
       const uint32_t v = R.face_vertices[c];
-      if (!seen[v]) seen[v] = 1, L.irregular[v] = !regular_vertex(L, R, v);
+      if (!seen[v])
+        seen[v] = 1, L.irregular[v] = o_.inf_sharp_patches ? !regular_vertex_inf(L, R, v)
+                                                           : !regular_vertex(L, R, v);
       want = want || (L.irregular[v] && L.rem[v] > 0);
       // Patches need quads all round their corners: faces next to a non-quad go down once too.
       if (k == 0 && !want)
@@ -594,7 +678,9 @@ void Builder::build(PatchTable& out, SparseRefinement& r, PatchStats* stats) {
       pp.level = uint8_t(k), pp.base_face = fp.base, pp.corner = fp.corner;
       for (int e = 0; e < 4; ++e) {
         const uint32_t tw = t.corner_twin[corner[e]];
-        if (tw == kNone) pp.boundary |= uint8_t(1u << e);
+        const bool sharp_cut = o_.inf_sharp_patches && L.corner_sharpness[corner[e]] >= kInf &&
+                               regular && cuts_at_inf_sharp(L, R, a[e]);
+        if (tw == kNone || sharp_cut) pp.boundary |= uint8_t(1u << e);
         if (tw < kNonManifold) {
           const uint32_t g = t.corner_face[tw];
           if (L.owned[g] && L.requested[g]) pp.transition |= uint8_t(1u << e);
@@ -602,9 +688,23 @@ void Builder::build(PatchTable& out, SparseRefinement& r, PatchStats* stats) {
       }
       if (regular) {
         RingView rings[4];
+        Ring spans[4];
         int in_ring[4];
         for (int i = 0; i < 4; ++i) {
-          rings[i] = ring(L, R, a[i]);
+          if (cuts_at_inf_sharp(L, R, a[i])) {
+            // Cut at infinitely sharp edges: the patch sees its span, as a boundary.
+            bool sharp = false;
+            spans[i] = span(L, R, corner[i], sharp);
+            RingView& g = rings[i];
+            g.edge_end = spans[i].edge_end.data();
+            g.diagonal = spans[i].diagonal.data();
+            g.face = spans[i].face.data();
+            g.faces = uint32_t(spans[i].face.size());
+            g.boundary = spans[i].boundary;
+            g.manifold = g.all_quads = true;
+          } else {
+            rings[i] = ring(L, R, a[i]);
+          }
           in_ring[i] = rings[i].index_of(f);
           if (in_ring[i] < 0) throw std::logic_error("patches: face missing in ring");
         }

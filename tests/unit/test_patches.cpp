@@ -24,17 +24,18 @@ struct OsdAdaptive {
   int ptex_faces = 0;
 };
 
-OsdAdaptive osd_adaptive(const Mesh& cage, int depth, const SubdivOptions& options) {
+OsdAdaptive osd_adaptive(const Mesh& cage, int depth, const SubdivOptions& options,
+                         bool inf_sharp) {
   OsdAdaptive a;
   a.refiner = test::osd_refiner(cage, options);
   osd::Far::TopologyRefiner::AdaptiveOptions ao(depth);
   ao.useSingleCreasePatch = false;
-  ao.useInfSharpPatch = false;
+  ao.useInfSharpPatch = inf_sharp;
   ao.considerFVarChannels = false;
   a.refiner->RefineAdaptive(ao);
   osd::Far::PatchTableFactory::Options po(depth);
   po.SetEndCapType(osd::Far::PatchTableFactory::Options::ENDCAP_GREGORY_BASIS);
-  po.useInfSharpPatch = false;
+  po.useInfSharpPatch = inf_sharp;
   po.useSingleCreasePatch = false;
   a.table.reset(osd::Far::PatchTableFactory::Create(*a.refiner, po));
   const int nrefined = a.refiner->GetNumVerticesTotal();
@@ -65,13 +66,16 @@ struct Comparison {
   std::string worst;
 };
 
-Comparison compare_with_osd(const Mesh& cage, int depth, const SubdivOptions& options) {
-  const OsdAdaptive ref = osd_adaptive(cage, depth, options);
+Comparison compare_with_osd(const Mesh& cage, int depth, const SubdivOptions& options,
+                            bool inf_sharp = false) {
+  const OsdAdaptive ref = osd_adaptive(cage, depth, options, inf_sharp);
   PatchOptions po;
   po.subdiv = options;
   po.depth = depth;
+  po.inf_sharp_patches = inf_sharp;
   const PatchTable table = build_patches(cage, po);
   EXPECT_EQ(int(table.ptex_count), ref.ptex_faces);
+  EXPECT_EQ(int(table.patch_count()), ref.table->GetNumPatchesTotal());
   const std::vector<float> pts = table.points(cage.positions);
   const PatchMap map(table);
   const osd::Far::PatchMap osd_map(*ref.table);
@@ -168,7 +172,7 @@ TEST(Patches, RandomCagesMatchOpenSubdiv) {
     const int depth = 1 + j % 3;
     Comparison c;
     try {
-      c = compare_with_osd(cage, depth, o);
+      c = compare_with_osd(cage, depth, o, j % 4 >= 2);  // half with infinitely sharp patches
     } catch (const InputError&) {
       continue;  // a cage limn rejects (checked elsewhere)
     }
@@ -212,6 +216,29 @@ TEST(Patches, DerivativesMatchFiniteDifferences) {
         worst = std::max(worst, err / len);
       }
   EXPECT_LT(worst, 2e-3);
+}
+
+// Infinitely sharp creases and corners as regular boundary/corner patches (OpenSubdiv's
+// useInfSharpPatch, limn's default).
+TEST(Patches, SharedCagesMatchOpenSubdivWithInfSharpPatches) {
+  const auto cages = test::shared_cages(LIMN_SHARED_MODELS);
+  if (cages.empty()) GTEST_SKIP() << "no shared models";
+  for (const auto& path : cages) {
+    const Mesh cage = read_mesh(path.string());
+    const SubdivOptions options = subdiv_options(cage);
+    for (int depth : {1, 2, 3}) {
+      Comparison c;
+      try {
+        c = compare_with_osd(cage, depth, options, true);
+      } catch (const std::exception& e) {
+        ADD_FAILURE() << path.filename() << " depth " << depth << ": " << e.what();
+        continue;
+      }
+      EXPECT_LT(c.max_position, 1e-5)
+          << path.filename() << " depth " << depth << " worst " << c.worst;
+      EXPECT_LT(c.max_normal, 5e-3) << path.filename() << " depth " << depth;
+    }
+  }
 }
 
 TEST(Patches, SharedCagesMatchOpenSubdiv) {

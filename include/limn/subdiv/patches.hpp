@@ -48,6 +48,10 @@ struct PatchOptions {
   /// Isolation depth (FAS's L, OpenSubdiv's adaptive isolation level) of every irregular
   /// feature when no per-vertex depth is given; the cap of per-vertex depths otherwise. 0-12.
   int depth = 3;
+  /// Infinitely sharp creases and corners become regular boundary and corner patches where the
+  /// faces between them are regular (OpenSubdiv's useInfSharpPatch), instead of isolating them
+  /// to `depth` like other features: fewer patches, and exact.
+  bool inf_sharp_patches = true;
 };
 
 /// Counts and timings of one build.
