@@ -48,14 +48,74 @@ struct Eval {
   }
 };
 
+// The limit basis over [0, 1] of a cubic curve with control points c0..c3 whose point c1 (at
+// t = 0) is a semi-sharp vertex of sharpness s: while s > 0 the curve is subdivided once more
+// around it (c1 keeps its place while s >= 1, a blend when 0 < s < 1, the smooth rule after),
+// halving the interval that holds t, until t leaves the crease's reach; the rest is an
+// ordinary B-spline segment of the control points reached.
+void crease_basis(double t, double s, double w[4], double d[4]) {
+  double A[4][4] = {{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}};
+  double scale = 1;
+  auto apply = [&](const double M[4][4]) {
+    double B[4][4] = {};
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j)
+        for (int k = 0; k < 4; ++k) B[i][j] += M[i][k] * A[k][j];
+    std::copy(&B[0][0], &B[0][0] + 16, &A[0][0]);
+  };
+  for (int guard = 0; guard < 16 && s > 0; ++guard) {
+    const double a = std::min(s, 1.0);  // weight of the sharp rule at c1
+    // c1' = a c1 + (1 - a)(c0 + 6 c1 + c2) / 8
+    const double v1[4] = {(1 - a) / 8, a + (1 - a) * 6 / 8, (1 - a) / 8, 0};
+    const double e01[4] = {0.5, 0.5, 0, 0}, e12[4] = {0, 0.5, 0.5, 0}, e23[4] = {0, 0, 0.5, 0.5};
+    const double v2[4] = {0, 1.0 / 8, 6.0 / 8, 1.0 / 8};
+    double M[4][4];
+    if (t < 0.5) {  // the half at the crease: (e01, c1', e12, c2'), crease still at index 1
+      const double* rows[4] = {e01, v1, e12, v2};
+      for (int i = 0; i < 4; ++i) std::copy(rows[i], rows[i] + 4, M[i]);
+      apply(M);
+      t *= 2, scale *= 2, s -= 1;
+    } else {  // the far half: (c1', e12, c2', e23), an ordinary segment from here on
+      const double* rows[4] = {v1, e12, v2, e23};
+      for (int i = 0; i < 4; ++i) std::copy(rows[i], rows[i] + 4, M[i]);
+      apply(M);
+      t = 2 * t - 1, scale *= 2, s = 0;
+    }
+  }
+  double b[4], db[4];
+  bspline(t, b, db);
+  for (int j = 0; j < 4; ++j) {
+    w[j] = d[j] = 0;
+    for (int i = 0; i < 4; ++i) w[j] += b[i] * A[i][j], d[j] += db[i] * A[i][j] * scale;
+  }
+}
+
 // 16 control points, tensor-product weights: the hot loop of every evaluation, kept in float
 // with fixed trip counts so the compiler vectorises it.
-void eval_regular(const uint32_t* cv, uint8_t boundary, double s, double t, const float* pts,
+void eval_regular(const uint32_t* cv, const PatchParam& pp, double s, double t, const float* pts,
                   Eval& e) {
+  const uint8_t boundary = pp.boundary;
   double wu[4], du[4], wv[4], dv[4];
   bspline(s, wu, du), bspline(t, wv, dv);
   fold(wu, boundary & 8, boundary & 2), fold(du, boundary & 8, boundary & 2);
   fold(wv, boundary & 1, boundary & 4), fold(dv, boundary & 1, boundary & 4);
+  if (pp.type == PatchType::single_crease) {
+    // The crease runs along edge crease_edge: rows (v) or columns (u), mirrored for the far
+    // edges so that the crease sits at the basis' t = 0.
+    double* w = pp.crease_edge == 0 || pp.crease_edge == 2 ? wv : wu;
+    double* d = pp.crease_edge == 0 || pp.crease_edge == 2 ? dv : du;
+    const double x = pp.crease_edge == 0   ? t
+                     : pp.crease_edge == 2 ? 1 - t
+                     : pp.crease_edge == 3 ? s
+                                           : 1 - s;
+    double cw[4], cd[4];
+    crease_basis(x, pp.sharpness, cw, cd);
+    const bool mirror = pp.crease_edge == 1 || pp.crease_edge == 2;
+    for (int i = 0; i < 4; ++i) {
+      w[i] = mirror ? cw[3 - i] : cw[i];
+      d[i] = mirror ? -cd[3 - i] : cd[i];
+    }
+  }
   float p[3] = {}, pu[3] = {}, pv[3] = {};
   for (int y = 0; y < 4; ++y) {
     float rp[3] = {}, ru[3] = {};
@@ -174,8 +234,7 @@ void evaluate_patches(const PatchTable& table, std::span<const float> points,
       const PatchParam& p =
           c.patch < nr ? table.regular_params[c.patch] : table.gregory_params[c.patch - nr];
       if (c.patch < nr)
-        eval_regular(&table.regular_points[16 * size_t(c.patch)], p.boundary, c.s, c.t,
-                     points.data(), e);
+        eval_regular(&table.regular_points[16 * size_t(c.patch)], p, c.s, c.t, points.data(), e);
       else
         eval_gregory(&table.gregory_points[20 * (size_t(c.patch) - nr)], c.s, c.t, points.data(),
                      e);

@@ -65,6 +65,8 @@ struct Level {
   std::vector<uint8_t> irregular;       // per vertex (complete ones only)
   std::vector<uint8_t> owned;           // per face: this level covers it (or a deeper one)
   std::vector<uint8_t> requested;       // per face: refined for its own sake
+  std::vector<int8_t> crease_edge;      // per face: local edge of a single crease, or -1
+  std::vector<float> crease_sharpness;  // per face: its sharpness
   struct Face {
     uint32_t ptex = kNone, base = 0;
     uint16_t u = 0, v = 0;
@@ -114,6 +116,7 @@ class Builder {
   bool cuts_at_inf_sharp(const Level& L, const RefinedLevel& R, uint32_t v) const;
   bool regular_vertex(Level& L, const RefinedLevel& R, uint32_t v) const;
   bool regular_vertex_inf(Level& L, const RefinedLevel& R, uint32_t v) const;
+  int single_crease(Level& L, const RefinedLevel& R, uint32_t f, float& sharpness) const;
   void aligned_corners(const Level& L, const RefinedLevel& R, uint32_t f, uint32_t c[4]) const;
 
   const Mesh& cage_;
@@ -302,6 +305,54 @@ bool Builder::regular_vertex(Level& L, const RefinedLevel& R, uint32_t v) const 
   return nf == 1 && vs >= kInf;
 }
 
+// A single-crease face: a quad of interior valence-4 corners whose edge j runs along a semi-sharp
+// crease that goes straight through both of its ends with one sharpness (the two crease edges at
+// each end are opposite in its ring), the other two corners plain. Returns j, or -1.
+int Builder::single_crease(Level& L, const RefinedLevel& R, uint32_t f, float& sharpness) const {
+  const Topology& t = L.topo;
+  const uint32_t b = R.face_offsets[f];
+  if (R.face_offsets[f + 1] - b != 4) return -1;
+  int kind[4];  // 0 plain, 1 crease end, -1 neither
+  float s_at[4] = {};
+  for (uint32_t i = 0; i < 4; ++i) {
+    const uint32_t v = R.face_vertices[b + i];
+    const RingView g = ring(L, R, v);
+    kind[i] = -1;
+    if (!g.manifold || !g.all_quads || g.boundary || g.faces != 4 || R.vertex_sharpness[v] != 0)
+      continue;
+    // Sharp edges by their position in the ring (interior: one outgoing half-edge per edge).
+    int count = 0, first = -1, second = -1;
+    float s0 = 0, s1 = 0;
+    for (uint32_t k = t.vertex_offsets[v]; k < t.vertex_offsets[v + 1]; ++k) {
+      const uint32_t c = t.vertex_corners[k];
+      const float x = L.corner_sharpness[c];
+      if (x <= 0) continue;
+      const uint32_t end = R.face_vertices[t.corner_next[c]];
+      int m = -1;
+      for (uint32_t q = 0; q < 4; ++q)
+        if (g.edge_end[q] == end) m = int(q);
+      (count == 0 ? first : second) = m;
+      (count == 0 ? s0 : s1) = x;
+      ++count;
+    }
+    if (count == 0) {
+      kind[i] = 0;
+    } else if (count == 2 && s0 == s1 && s0 < kInf && first >= 0 && second >= 0 &&
+               (first - second + 4) % 4 == 2) {
+      kind[i] = 1, s_at[i] = s0;
+    }
+  }
+  for (int j = 0; j < 4; ++j) {
+    const int n1 = (j + 1) % 4, n2 = (j + 2) % 4, n3 = (j + 3) % 4;
+    if (kind[j] == 1 && kind[n1] == 1 && kind[n2] == 0 && kind[n3] == 0 && s_at[j] == s_at[n1] &&
+        L.corner_sharpness[b + uint32_t(j)] == s_at[j]) {
+      sharpness = s_at[j];
+      return j;
+    }
+  }
+  return -1;
+}
+
 // With infinitely sharp patches: regular when every span between infinitely sharp (or boundary)
 // edges is a regular boundary (two faces, crease rule) or a regular corner (one face, corner
 // rule), with nothing semi-sharp.
@@ -424,15 +475,29 @@ void Builder::request(size_t k, const SparseLevel& S, std::vector<uint8_t>& requ
   L.irregular.assign(nv, 0);
   std::vector<uint8_t> seen(nv, 0);
   L.requested.assign(nf, 0);
+  L.crease_edge.assign(nf, -1);
+  L.crease_sharpness.assign(nf, 0.0f);
+  auto tag = [&](uint32_t v) {
+    if (!seen[v])
+      seen[v] = 1, L.irregular[v] = o_.inf_sharp_patches ? !regular_vertex_inf(L, R, v)
+                                                         : !regular_vertex(L, R, v);
+  };
   for (uint32_t f = 0; f < nf; ++f) {
     if (!L.owned[f]) continue;
     const uint32_t b = R.face_offsets[f], e = R.face_offsets[f + 1];
+    if (o_.single_crease_patches) {
+      float sharp = 0;
+      const int j = single_crease(L, R, f, sharp);
+      if (j >= 0) {
+        L.crease_edge[f] = int8_t(j), L.crease_sharpness[f] = sharp;
+        for (uint32_t c = b; c < e; ++c) tag(R.face_vertices[c]);  // for their other faces
+        continue;  // an exact patch as it is: never refined for its own sake
+      }
+    }
     bool want = e - b != 4 && k == 0;  // non-quads: always once
     for (uint32_t c = b; c < e; ++c) {
       const uint32_t v = R.face_vertices[c];
-      if (!seen[v])
-        seen[v] = 1, L.irregular[v] = o_.inf_sharp_patches ? !regular_vertex_inf(L, R, v)
-                                                           : !regular_vertex(L, R, v);
+      tag(v);
       want = want || (L.irregular[v] && L.rem[v] > 0);
       // Patches need quads all round their corners: faces next to a non-quad go down once too.
       if (k == 0 && !want)
@@ -667,10 +732,11 @@ void Builder::build(PatchTable& out, SparseRefinement& r, PatchStats* stats) {
         throw std::logic_error("patches: a non-quad face was left unrefined");
       uint32_t corner[4], a[4];
       aligned_corners(L, R, f, corner);
+      const bool crease = L.crease_edge[f] >= 0;
       bool regular = true;
       for (int i = 0; i < 4; ++i) {
         a[i] = R.face_vertices[corner[i]];
-        regular = regular && !L.irregular[a[i]];
+        regular = regular && (crease || !L.irregular[a[i]]);
       }
       PatchParam pp;
       const Level::Face& fp = L.param[f];
@@ -708,7 +774,11 @@ void Builder::build(PatchTable& out, SparseRefinement& r, PatchStats* stats) {
           in_ring[i] = rings[i].index_of(f);
           if (in_ring[i] < 0) throw std::logic_error("patches: face missing in ring");
         }
-        pp.type = PatchType::regular;
+        pp.type = crease ? PatchType::single_crease : PatchType::regular;
+        if (crease) {
+          pp.crease_edge = uint8_t((L.crease_edge[f] + L.param[f].rot) % 4);
+          pp.sharpness = L.crease_sharpness[f];
+        }
         uint32_t grid[16];
         bool have[16] = {};
         auto put = [&](int x, int y, uint32_t p) {

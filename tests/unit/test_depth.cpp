@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "deep_reference.hpp"
 #include "limn/mesh/shapes.hpp"
 #include "limn/subdiv/depth.hpp"
 #include "limn/subdiv/patches.hpp"
@@ -25,71 +26,8 @@ TEST(Depth, EigenvaluesMatchTheDesignTable) {
   }
 }
 
-// Ptex coordinates of the corners of every face of a uniform level, by following child faces
-// (child face c of a level is the parent's corner c, its corner 0 the parent's corner).
-struct FaceParam {
-  uint32_t ptex;
-  double u, v, size;
-  int rot;
-};
-
-std::vector<FaceParam> uniform_params(const UniformRefinement& r, const Mesh& cage) {
-  std::vector<FaceParam> cur;
-  uint32_t ptex = 0;
-  const RefinedLevel& L0 = r.levels[0];
-  std::vector<uint32_t> first(cage.face_count());
-  for (size_t f = 0; f < cage.face_count(); ++f) {
-    first[f] = ptex;
-    cur.push_back({ptex, 0, 0, 1, 0});
-    ptex += cage.face_size(f) == 4 ? 1 : cage.face_size(f);
-  }
-  for (size_t k = 1; k < r.levels.size(); ++k) {
-    const RefinedLevel& P = r.levels[k - 1];
-    std::vector<FaceParam> next(r.levels[k].face_count());
-    for (uint32_t f = 0; f < P.face_count(); ++f)
-      for (uint32_t c = P.face_offsets[f]; c < P.face_offsets[f + 1]; ++c) {
-        const uint32_t child = c - P.face_offsets[f];
-        FaceParam p = cur[f];
-        if (k == 1 && P.face_offsets[f + 1] - P.face_offsets[f] != 4) {
-          p = {first[f] + child, 0, 0, 1, 0};
-        } else {
-          const int q = int(child + uint32_t(p.rot)) % 4;
-          p.size *= 0.5;
-          p.u += (q == 1 || q == 2) ? p.size : 0.0;
-          p.v += q >= 2 ? p.size : 0.0;
-          p.rot = q;
-        }
-        next[c] = p;
-      }
-    cur = std::move(next);
-  }
-  (void)L0;
-  return cur;
-}
-
-// The deep reference: limit points at the corners of every face of uniform level 7, with their
-// ptex coordinates.
-struct Reference {
-  std::vector<float> limit;
-  std::vector<FaceParam> faces;
-  RefinedLevel level;
-};
-
-Reference reference(const Mesh& cage) {
-  const int ref_level = 7;
-  const UniformRefinement r = refine_uniform(cage, ref_level, subdiv_options(cage));
-  const std::vector<float> pos = r.positions(cage, ref_level);
-  const LimitStencils ls = limit_stencils(r, ref_level);
-  Reference out;
-  out.limit.resize(pos.size());
-  apply_stencils(ls.position, pos.data(), out.limit.data(), 3);
-  out.faces = uniform_params(r, cage);
-  out.level = r.levels.back();
-  return out;
-}
-
-double max_screen_error(const Mesh& cage, const Reference& ref, const Camera& cam, float tolerance,
-                        int* deepest) {
+double max_screen_error(const Mesh& cage, const test::Reference& ref, const Camera& cam,
+                        float tolerance, int* deepest) {
   const VertexErrorModel model = vertex_error_model(cage, subdiv_options(cage));
   DepthOptions d;
   d.tolerance_px = tolerance;
@@ -103,19 +41,9 @@ double max_screen_error(const Mesh& cage, const Reference& ref, const Camera& ca
   const PatchMap map(t);
   const std::vector<float> pts = t.points(cage.positions);
 
-  const RefinedLevel& L = ref.level;
-  static constexpr double kCu[4] = {0, 1, 1, 0}, kCv[4] = {0, 0, 1, 1};
   std::vector<PatchCoord> coords;
   std::vector<uint32_t> at;
-  for (uint32_t f = 0; f < L.face_count(); ++f) {
-    if (L.face_hole[f]) continue;
-    for (int j = 0; j < 4; ++j) {
-      const FaceParam& p = ref.faces[f];
-      const int s = (j + p.rot) % 4;
-      coords.push_back(map.find(p.ptex, p.u + kCu[s] * p.size, p.v + kCv[s] * p.size));
-      at.push_back(L.face_vertices[L.face_offsets[f] + uint32_t(j)]);
-    }
-  }
+  test::reference_samples(ref, map, coords, at);
   std::vector<float> got(3 * coords.size());
   evaluate_patches(t, pts, coords, got.data());
   double worst = 0;
@@ -136,7 +64,7 @@ TEST(Depth, ScreenErrorStaysWithinTolerance) {
     torus.positions[i] += 0.03f * std::sin(float(i) * 1.7f);  // break the symmetry
   const Mesh cube = make_shape("cube");
   for (const Mesh* cage : {static_cast<const Mesh*>(&torus), &cube}) {
-    const Reference ref = reference(*cage);
+    const test::Reference ref = test::reference(*cage, 7);
     const Camera far = frame_camera(*cage, 640, 480);
     for (const float t : {0.5f, 2.0f}) {
       for (const float zoom : {1.0f, 0.6f, 0.35f}) {

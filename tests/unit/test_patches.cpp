@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <string>
 
+#include "deep_reference.hpp"
 #include "limn/mesh/io.hpp"
 #include "limn/mesh/shapes.hpp"
 #include "limn/subdiv/patches.hpp"
@@ -73,6 +75,7 @@ Comparison compare_with_osd(const Mesh& cage, int depth, const SubdivOptions& op
   po.subdiv = options;
   po.depth = depth;
   po.inf_sharp_patches = inf_sharp;
+  po.single_crease_patches = false;  // OpenSubdiv's CPU evaluation ignores crease sharpness
   const PatchTable table = build_patches(cage, po);
   EXPECT_EQ(int(table.ptex_count), ref.ptex_faces);
   EXPECT_EQ(int(table.patch_count()), ref.table->GetNumPatchesTotal());
@@ -347,6 +350,68 @@ TEST(Patches, DepthZeroNextToNonQuads) {
     const std::vector<float> pts = t.points(cage.positions);
     for (const float x : pts) EXPECT_TRUE(std::isfinite(x));
   }
+}
+
+}  // namespace
+}  // namespace limn
+
+namespace limn {
+namespace {
+
+// Single-crease patches are exact: where the table has regular or single-crease patches, it
+// agrees with the limit points of uniform level 6 (limn's refinement, which matches
+// OpenSubdiv's semi-sharp rules), and the semi-sharp creases need no isolation.
+TEST(Patches, SingleCreasePatchesAreExact) {
+  std::vector<std::pair<std::string, Mesh>> cages = {{"cage", make_shape("cage")}};
+  for (const char* name : {"osd/catmark_single_crease.obj", "osd/catmark_cubes_semisharp.obj",
+                           "osd/catmark_tent_creases1.obj"}) {
+    const std::filesystem::path p = std::filesystem::path(LIMN_SHARED_MODELS) / name;
+    if (std::filesystem::exists(p)) cages.emplace_back(name, read_mesh(p));
+  }
+  size_t total_crease = 0;
+  for (const auto& [name, cage] : cages) {
+    const test::Reference ref = test::reference(cage, 6);
+    for (const CreaseMethod method : {CreaseMethod::uniform, CreaseMethod::chaikin}) {
+      Mesh m = cage;
+      m.tags.crease_method = method;
+      test::Reference r =
+          method == subdiv_options(cage).crease_method ? ref : test::reference(m, 6);
+      PatchOptions po;
+      po.subdiv = subdiv_options(m);
+      po.depth = 3;
+      const PatchTable t = build_patches(m, po);
+      PatchOptions no = po;
+      no.single_crease_patches = false;
+      const PatchTable without = build_patches(m, no);
+      size_t crease = 0;
+      for (const PatchParam& p : t.regular_params) crease += p.type == PatchType::single_crease;
+      total_crease += crease;
+      if (crease) {
+        EXPECT_LT(t.patch_count(), without.patch_count()) << name;
+      }
+      const PatchMap map(t);
+      std::vector<PatchCoord> coords;
+      std::vector<uint32_t> at;
+      test::reference_samples(r, map, coords, at);
+      const std::vector<float> pts = t.points(m.positions);
+      std::vector<float> got(3 * coords.size());
+      evaluate_patches(t, pts, coords, got.data());
+      const double diag = bounding_box(m).diagonal();
+      double worst = 0;
+      size_t checked = 0;
+      for (size_t i = 0; i < coords.size(); ++i) {
+        if (coords[i].patch >= t.regular_params.size()) continue;  // end caps approximate
+        const float* q = &r.limit[3 * size_t(at[i])];
+        worst = std::max(worst, double(std::hypot(got[3 * i] - q[0], got[3 * i + 1] - q[1],
+                                                  got[3 * i + 2] - q[2])) /
+                                    diag);
+        ++checked;
+      }
+      EXPECT_GT(checked, 0u);
+      EXPECT_LT(worst, 1e-5) << name << (method == CreaseMethod::chaikin ? " chaikin" : "");
+    }
+  }
+  EXPECT_GT(total_crease, 0u);
 }
 
 }  // namespace

@@ -27,9 +27,12 @@
 
 namespace limn {
 
-enum class PatchType : uint8_t { regular = 0, gregory = 1 };
+/// single_crease: a regular patch (in the regular arrays) with one semi-sharp crease along its
+/// edge PatchParam::crease_edge, evaluated exactly (Niessner, Loop, Greiner 2012: across the
+/// crease the patch is the limit of a cubic curve with a semi-sharp vertex).
+enum class PatchType : uint8_t { regular = 0, gregory = 1, single_crease = 2 };
 
-/// Where a patch lies and how it meets its neighbours. 16 bytes, for GPU buffers as is.
+/// Where a patch lies and how it meets its neighbours. 24 bytes, for GPU buffers as is.
 struct PatchParam {
   uint32_t ptex = 0;       ///< ptex face
   uint16_t u = 0, v = 0;   ///< origin in the ptex face, in units of 2^-depth
@@ -39,8 +42,10 @@ struct PatchParam {
   uint8_t transition = 0;  ///< bit e: edge e borders finer patches (split it when tessellating)
   uint32_t base_face = 0;  ///< cage face
   PatchType type = PatchType::regular;
-  uint8_t corner = 0;  ///< under a non-quad cage face: which corner's ptex face; else 0
-  uint16_t reserved = 0;
+  uint8_t corner = 0;       ///< under a non-quad cage face: which corner's ptex face; else 0
+  uint8_t crease_edge = 0;  ///< single_crease: the edge the crease runs along
+  uint8_t reserved = 0;
+  float sharpness = 0;  ///< single_crease: the crease's sharpness at the patch's level
 };
 
 struct PatchOptions {
@@ -52,6 +57,10 @@ struct PatchOptions {
   /// faces between them are regular (OpenSubdiv's useInfSharpPatch), instead of isolating them
   /// to `depth` like other features: fewer patches, and exact.
   bool inf_sharp_patches = true;
+  /// A regular face with one semi-sharp crease along an edge (sharpness the same along the crease
+  /// through its 4 x 4 points) becomes one exact single-crease patch instead of being isolated
+  /// until the sharpness decays (OpenSubdiv's useSingleCreasePatch).
+  bool single_crease_patches = true;
 };
 
 /// Counts and timings of one build.
