@@ -20,7 +20,7 @@ namespace {
 
 struct AdaptiveOpts {
   int depth = -1, max_depth = 10, tess = 4;
-  float tolerance = -1;
+  float tolerance = -1, tess_px = 0;
   std::string camera, resolution;
   bool depth_colors = false, dynamic = false;  // dynamic: --tolerance was given
 };
@@ -114,6 +114,7 @@ void run_adaptive(const std::string& mesh, const std::string& out_path, const st
   timings["points"] = sw.lap();
   TessellateOptions to;
   to.factor = a.tess;
+  if (a.tess_px > 0) to.camera = &cam, to.pixels_per_segment = a.tess_px;
   to.depth_colors = a.depth_colors;
   const Mesh out = tessellate_patches(cage, table, points, to);
   timings["tessellate"] = sw.lap();
@@ -163,7 +164,8 @@ void run_adaptive(const std::string& mesh, const std::string& out_path, const st
         {"vertex_depth_histogram", histogram},
         {"estimated_max_error_px", worst_px},
         {"points", table.point_count()},
-        {"tess", a.tess},
+        {"tess", a.tess_px > 0 ? nlohmann::json({{"pixels_per_segment", a.tess_px}})
+                               : nlohmann::json(a.tess)},
         {"output_vertices", out.vertex_count()},
         {"output_faces", out.face_count()},
         {"timings_ms", timings}};
@@ -202,6 +204,8 @@ void add_subdivide(CLI::App& app) {
                   "ex,ey,ez,tx,ty,tz,fovy_deg (default: frames the model from the front)");
   cmd->add_option("--resolution", o->a.resolution, "Image size WxH for --tolerance (1280x720)");
   cmd->add_option("--tess", o->a.tess, "--adaptive: segments per patch edge (1-64, default 4)");
+  cmd->add_option("--tess-px", o->a.tess_px,
+                  "--adaptive: screen-space tessellation, one segment per PX pixels (camera)");
   cmd->add_flag("--depth-colors", o->a.depth_colors,
                 "--adaptive: colour vertices by the level of their patch");
   cmd->add_option("--format", o->format, "Input format, overriding the extension");
@@ -212,11 +216,16 @@ void add_subdivide(CLI::App& app) {
       throw InputError("subdivide: give exactly one of --uniform L and --adaptive");
     if (!o->adaptive)
       for (const char* a : {"--depth", "--tolerance", "--max-depth", "--camera", "--resolution",
-                            "--tess", "--depth-colors"})
+                            "--tess", "--tess-px", "--depth-colors"})
         if (cmd->count(a)) throw InputError(fmt::format("{} goes with --adaptive", a));
     if (o->adaptive) {
       if (o->limit) throw InputError("--limit goes with --uniform (--adaptive is the limit)");
       o->a.dynamic = cmd->count("--tolerance") > 0;
+      if (cmd->count("--tess-px") && cmd->count("--tess"))
+        throw InputError("--tess and --tess-px exclude each other");
+      if (cmd->count("--tess-px") && !(o->a.tess_px > 0 && std::isfinite(o->a.tess_px)))
+        throw InputError(
+            fmt::format("--tess-px {}: must be a positive number of pixels", o->a.tess_px));
       run_adaptive(o->mesh, o->out, o->format, o->a, o->json);
       return;
     }

@@ -13,6 +13,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <unordered_map>
 
@@ -163,9 +164,13 @@ uint32_t Tessellator::vertex(const Key& k, uint32_t patch, float s, float t) {
 }
 
 Mesh Tessellator::run() {
-  const int n = o_.factor;
-  if (n < 1 || n > 64)
+  const bool screen = o_.camera != nullptr;
+  const int n = screen ? 64 : o_.factor;  // screen-space rates are powers of two up to 64
+  if (!screen && (n < 1 || n > 64))
     throw InputError(fmt::format("tessellate: factor {} out of range (1-64)", n));
+  if (screen && !(o_.pixels_per_segment > 0))
+    throw InputError(
+        fmt::format("tessellate: {} pixels per segment must be positive", o_.pixels_per_segment));
   if (cage_.vertex_count() >= (1u << 28))
     throw InputError("tessellate: the cage has too many vertices (2^28 at most)");
   int max_depth = 0;
@@ -181,13 +186,38 @@ Mesh Tessellator::run() {
   }
   if (ptex_.size() != t_.ptex_count) throw InputError("tessellate: the table is not this cage's");
 
+  // Segments per patch edge: the factor, or from the edge's length on screen (its corners
+  // projected; the next power of two of length / pixels_per_segment, 1-64).
+  std::vector<std::array<int, 4>> rate(np, {n, n, n, n});
+  if (screen) {
+    std::vector<PatchCoord> corners;
+    for (uint32_t i = 0; i < np; ++i)
+      for (int c = 0; c < 4; ++c) corners.push_back({i, float(c == 1 || c == 2), float(c >= 2)});
+    std::vector<float> cp(3 * corners.size());
+    evaluate_patches(t_, pts_, corners, cp.data());
+    for (size_t i = 0; i < np; ++i)
+      for (int e = 0; e < 4; ++e) {
+        double x0, y0, x1, y1;
+        const float* a = &cp[3 * (4 * i + size_t(e))];
+        const float* b = &cp[3 * (4 * i + size_t(e + 1) % 4)];
+        int r = 64;
+        if (o_.camera->project(a, x0, y0) && o_.camera->project(b, x1, y1)) {
+          const double segs = std::hypot(x1 - x0, y1 - y0) / o_.pixels_per_segment;
+          r = 1;
+          while (r < 64 && r < segs) r *= 2;
+        }
+        rate[i][size_t(e)] = r;
+      }
+  }
+
   // Pass 1: every patch edge's own samples on its line.
   for (size_t i = 0; i < np; ++i)
     for (int e = 0; e < 4; ++e) {
       int64_t len;
       const Line l = patch_edge(param(i), e, len);
       std::vector<int64_t>& qs = lines_[l.key];
-      for (int k = 0; k <= n; ++k) qs.push_back(l.q0 + l.dq * (len * k / n));
+      const int m = rate[i][size_t(e)];
+      for (int k = 0; k <= m; ++k) qs.push_back(l.q0 + l.dq * (len * k / m));
     }
   for (auto& [key, qs] : lines_) {
     std::sort(qs.begin(), qs.end());
@@ -197,7 +227,7 @@ Mesh Tessellator::run() {
   // Pass 2: vertices and triangles per patch.
   Mesh out;
   std::vector<uint32_t> tris;
-  std::vector<uint32_t> inner((n + 1) * (n + 1));
+  std::vector<uint32_t> inner;
   std::vector<std::pair<double, uint32_t>> side[4];  // (position along the edge 0..1, vertex)
   static constexpr float kCs[4] = {0, 1, 1, 0}, kCt[4] = {0, 0, 1, 1};
   for (uint32_t i = 0; i < np; ++i) {
@@ -230,20 +260,25 @@ Mesh Tessellator::run() {
       }
       std::sort(side[e].begin(), side[e].end());
     }
-    // Interior grid of the patch, then the four stitching strips.
-    for (int y = 1; y < n; ++y)
-      for (int x = 1; x < n; ++x) {
-        inner[size_t(y) * (n + 1) + x] = uint32_t(coords_.size());
-        coords_.push_back({i, float(x) / float(n), float(y) / float(n)});
+    // Interior grid of the patch (as fine as its finer opposite edges), then the four
+    // stitching strips.
+    const int nu = std::max(rate[i][0], rate[i][2]), nv = std::max(rate[i][1], rate[i][3]);
+    const size_t w = size_t(nu) + 1;
+    inner.assign(w * (size_t(nv) + 1), 0);
+    for (int y = 1; y < nv; ++y)
+      for (int x = 1; x < nu; ++x) {
+        inner[size_t(y) * w + size_t(x)] = uint32_t(coords_.size());
+        coords_.push_back({i, float(x) / float(nu), float(y) / float(nv)});
       }
-    for (int y = 1; y + 1 < n; ++y)
-      for (int x = 1; x + 1 < n; ++x) {
-        const uint32_t a = inner[size_t(y) * (n + 1) + x], b = inner[size_t(y) * (n + 1) + x + 1];
-        const uint32_t c = inner[size_t(y + 1) * (n + 1) + x + 1],
-                       d = inner[size_t(y + 1) * (n + 1) + x];
+    for (int y = 1; y + 1 < nv; ++y)
+      for (int x = 1; x + 1 < nu; ++x) {
+        const uint32_t a = inner[size_t(y) * w + size_t(x)],
+                       b = inner[size_t(y) * w + size_t(x) + 1];
+        const uint32_t c = inner[size_t(y + 1) * w + size_t(x) + 1],
+                       d = inner[size_t(y + 1) * w + size_t(x)];
         tris.insert(tris.end(), {a, b, c, a, c, d});
       }
-    if (n == 1) {  // no interior grid: fan the boundary around the centre
+    if (nu < 2 || nv < 2) {  // no interior grid: fan the boundary around the centre
       const uint32_t centre = uint32_t(coords_.size());
       coords_.push_back({i, 0.5f, 0.5f});
       for (int e = 0; e < 4; ++e)
@@ -254,23 +289,24 @@ Mesh Tessellator::run() {
     for (int e = 0; e < 4; ++e) {
       // The inner row along edge e, from its start corner's side to its end's.
       std::vector<std::pair<double, uint32_t>> row;
-      for (int k = 1; k < n; ++k) {
+      const int m = e % 2 == 0 ? nu : nv;
+      for (int k = 1; k < m; ++k) {
         int x = 0, y = 0;
         switch (e) {
           case 0:
             x = k, y = 1;
             break;
           case 1:
-            x = n - 1, y = k;
+            x = nu - 1, y = k;
             break;
           case 2:
-            x = n - k, y = n - 1;
+            x = nu - k, y = nv - 1;
             break;
           default:
-            x = 1, y = n - k;
+            x = 1, y = nv - k;
             break;
         }
-        row.emplace_back(double(k) / n, inner[size_t(y) * (n + 1) + x]);
+        row.emplace_back(double(k) / m, inner[size_t(y) * w + size_t(x)]);
       }
       const auto& b = side[e];
       size_t p = 0, q = 0;

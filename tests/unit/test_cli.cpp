@@ -319,6 +319,16 @@ TEST_F(Cli, SubdivideAdaptiveToleranceFollowsTheCamera) {
   };
   const size_t near = patches("0,2,2.5,0,0,0,45"), far = patches("0,8,10,0,0,0,45");
   EXPECT_GT(near, far);
+  // Screen-space tessellation: a closer camera gives more triangles, and stays watertight.
+  auto triangles = [&](const std::string& camera) {
+    const Result r = limn("subdivide " + q(cage) + " -o " + q(dir_ / "s.ply") +
+                          " --adaptive --depth 2 --tess-px 5 --json --camera " + camera);
+    EXPECT_EQ(r.code, 0) << r.err;
+    const Mesh m = read_mesh(dir_ / "s.ply");
+    EXPECT_EQ(analyze(m, build_topology(m)).boundary_edges, 0u);
+    return m.face_count();
+  };
+  EXPECT_GT(triangles("0,2,2.5,0,0,0,45"), triangles("0,8,10,0,0,0,45"));
   const Mesh s = read_mesh(dir_ / "d.ply");
   EXPECT_EQ(s.colors.size(), 4 * s.vertex_count());
 }
@@ -332,7 +342,8 @@ TEST_F(Cli, SubdivideAdaptiveRejectsBadOptions) {
         "--adaptive --tolerance 0", "--adaptive --tolerance -3", "--adaptive --camera 1,2,3",
         "--adaptive --camera 0,0,5,0,0,0,200", "--adaptive --camera a,0,5,0,0,0,45",
         "--adaptive --tolerance 1 --resolution 640", "--adaptive --tolerance 1 --resolution 0x10",
-        "--adaptive --limit", "--adaptive --max-depth 20"}) {
+        "--adaptive --limit", "--adaptive --max-depth 20", "--adaptive --tess-px 0",
+        "--adaptive --tess 3 --tess-px 4", "--uniform 1 --tess-px 4"}) {
     const Result r = limn("subdivide " + q(cage) + " -o " + q(dir_ / "x.ply") + " " + bad);
     EXPECT_EQ(r.code, 2) << bad << ": " << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << bad << ": " << r.err;

@@ -8,6 +8,7 @@
 #include "limn/mesh/io.hpp"
 #include "limn/mesh/shapes.hpp"
 #include "limn/mesh/topology.hpp"
+#include "limn/subdiv/depth.hpp"
 #include "limn/subdiv/tessellate.hpp"
 #include "random_cage.hpp"
 
@@ -123,6 +124,43 @@ TEST(Tessellate, DepthColorsAndNormals) {
   }
   to.factor = 0;
   EXPECT_THROW(tessellate_patches(cage, t, t.points(cage.positions), to), InputError);
+}
+
+}  // namespace
+}  // namespace limn
+
+namespace limn {
+namespace {
+
+// Screen-space rates: still watertight where neighbouring patches pick different rates, finer
+// where the camera is close, and each patch edge's projected segments stay near the target.
+TEST(Tessellate, ScreenSpaceRatesAreWatertightAndFollowTheCamera) {
+  const Mesh cage = make_shape("torus");
+  PatchOptions po;
+  po.depth = 3;
+  const PatchTable t = build_patches(cage, po);
+  const std::vector<float> pts = t.points(cage.positions);
+  const Camera far = frame_camera(cage, 800, 600);
+  Camera near = far;
+  for (int k = 0; k < 3; ++k) near.eye[k] = far.target[k] + 0.4f * (far.eye[k] - far.target[k]);
+  size_t faces[2];
+  for (int i = 0; i < 2; ++i) {
+    TessellateOptions to;
+    to.camera = i == 0 ? &far : &near;
+    to.pixels_per_segment = 6;
+    const Mesh m = tessellate_patches(cage, t, pts, to);
+    const EdgeCounts c = edge_counts(m);
+    EXPECT_EQ(c.boundary, 0u) << i;
+    EXPECT_EQ(c.non_manifold, 0u) << i;
+    EXPECT_EQ(c.inconsistent, 0u) << i;
+    EXPECT_EQ(c.degenerate, 0u) << i;
+    faces[i] = m.face_count();
+  }
+  EXPECT_GT(faces[1], faces[0]);
+  TessellateOptions bad;
+  bad.camera = &far;
+  bad.pixels_per_segment = 0;
+  EXPECT_THROW(tessellate_patches(cage, t, pts, bad), InputError);
 }
 
 }  // namespace
