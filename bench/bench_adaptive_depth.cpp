@@ -1,6 +1,7 @@
 // Patches at equal screen error: view-dependent depth per vertex (limn select_depths, tolerance
 // 0.5 px) vs the fixed depth (classic FAS / OpenSubdiv's isolation level) needed for the same
-// measured error, over a camera path (near, mid, far) on the FAS cages. The error is measured:
+// measured error, over a camera path (near, mid, far) on the FAS cages. sel_ms: what a view
+// change costs (select_depths + select_patches from a hierarchy built once). The error is measured:
 // 3 x 3 samples on every patch, against a reference table of depth 10 (regular patches are
 // exact, its end caps are 2^-10 of a face), in pixels at the sample (visible samples only).
 //   limn_bench_adaptive_depth [--tolerance PX] [--resolution WxH]
@@ -78,6 +79,14 @@ int main(int argc, char** argv) {
     Reference ref{build_patches(cage, po), {}};
     ref.points = ref.table.points(cage.positions);
     const VertexErrorModel model = vertex_error_model(cage, po.subdiv);
+    // The hierarchy to depth 10: built once; every view only selects from it.
+    const auto th = std::chrono::steady_clock::now();
+    const PatchHierarchy hierarchy = build_patch_hierarchy(cage, po);
+    const double hier_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - th).count();
+    fmt::print("{:<16} hierarchy to depth 10: {} nodes, {} patches, built in {:.1f} ms\n",
+               fs::path(name).filename().string(), hierarchy.node_count(),
+               hierarchy.table.patch_count(), hier_ms);
     const Camera framed = frame_camera(cage, w, h);
     const std::pair<const char*, float> path[] = {{"near", 0.35f}, {"mid", 1.0f}, {"far", 3.0f}};
     for (const auto& [label, zoom] : path) {
@@ -89,8 +98,10 @@ int main(int argc, char** argv) {
       d.max_depth = 10;
       const auto t0 = std::chrono::steady_clock::now();
       const std::vector<uint8_t> depth = select_depths(cage, model, cam, d);
+      const PatchTable chosen = select_patches(hierarchy, depth);
       const double sel_ms =
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      if (chosen.patch_count() == 0) return 1;
       po.depth = 10;
       const PatchTable dyn = build_patches(cage, po, depth);
       const double dyn_err = measured_error(cage, dyn, ref, cam);

@@ -23,6 +23,7 @@ namespace limn {
 namespace {
 
 constexpr int kMaxDepth = 16;
+constexpr uint32_t kPatchGregory = 0x80000000u;  // hierarchy: node_patch of an end cap
 constexpr float kInf = kInfiniteSharpness;
 
 double ms_since(std::chrono::steady_clock::time_point t0) {
@@ -60,13 +61,16 @@ struct Ring {
 // Per-level state of the isolation.
 struct Level {
   Topology topo;
-  std::vector<float> corner_sharpness;  // sharpness of each corner's edge (by corner)
-  std::vector<uint8_t> rem;             // per vertex: levels still wanted around it
-  std::vector<uint8_t> irregular;       // per vertex (complete ones only)
-  std::vector<uint8_t> owned;           // per face: this level covers it (or a deeper one)
-  std::vector<uint8_t> requested;       // per face: refined for its own sake
-  std::vector<int8_t> crease_edge;      // per face: local edge of a single crease, or -1
-  std::vector<float> crease_sharpness;  // per face: its sharpness
+  std::vector<float> corner_sharpness;     // sharpness of each corner's edge (by corner)
+  std::vector<uint8_t> rem;                // per vertex: levels still wanted around it
+  std::vector<uint8_t> irregular;          // per vertex (complete ones only)
+  std::vector<uint8_t> owned;              // per face: this level covers it (or a deeper one)
+  std::vector<uint8_t> requested;          // per face: refined for its own sake
+  std::vector<uint8_t> force;              // per face: refined whatever the depths (non-quads)
+  std::vector<uint32_t> src_offsets, src;  // hierarchy: the cage vertices each vertex's depth
+                                           // comes from (CSR, sorted)
+  std::vector<int8_t> crease_edge;         // per face: local edge of a single crease, or -1
+  std::vector<float> crease_sharpness;     // per face: its sharpness
   struct Face {
     uint32_t ptex = kNone, base = 0;
     uint16_t u = 0, v = 0;
@@ -98,8 +102,9 @@ struct RingView {
 
 class Builder {
  public:
-  Builder(const Mesh& cage, const PatchOptions& o, std::span<const uint8_t> depth)
-      : cage_(cage), o_(o), depth_(depth) {}
+  Builder(const Mesh& cage, const PatchOptions& o, std::span<const uint8_t> depth,
+          PatchHierarchy* h = nullptr)
+      : cage_(cage), o_(o), depth_(depth), h_(h) {}
 
   void request(size_t k, const SparseLevel& S, std::vector<uint8_t>& requested);
   void build(PatchTable& out, SparseRefinement& r, PatchStats* stats);
@@ -124,6 +129,7 @@ class Builder {
   std::span<const uint8_t> depth_;
   std::vector<Level> levels_;
   uint32_t ptex_count_ = 0;
+  PatchHierarchy* h_;
 };
 
 RingView Builder::ring(Level& L, const RefinedLevel& R, uint32_t v) const {
@@ -414,7 +420,7 @@ void Builder::request(size_t k, const SparseLevel& S, std::vector<uint8_t>& requ
   L.rem.assign(nv, 0);
   if (k == 0) {
     for (size_t v = 0; v < nv; ++v)
-      L.rem[v] = uint8_t(depth_.empty() ? o_.depth : std::min<int>(depth_[v], kMaxDepth));
+      L.rem[v] = uint8_t(depth_.empty() ? o_.depth : std::min<int>(depth_[v], o_.depth));
   } else {
     const Level& P = levels_[k - 1];
     auto dec = [](int d) { return uint8_t(d > 0 ? d - 1 : 0); };
@@ -475,6 +481,7 @@ void Builder::request(size_t k, const SparseLevel& S, std::vector<uint8_t>& requ
   L.irregular.assign(nv, 0);
   std::vector<uint8_t> seen(nv, 0);
   L.requested.assign(nf, 0);
+  L.force.assign(nf, 0);
   L.crease_edge.assign(nf, -1);
   L.crease_sharpness.assign(nf, 0.0f);
   auto tag = [&](uint32_t v) {
@@ -494,22 +501,57 @@ void Builder::request(size_t k, const SparseLevel& S, std::vector<uint8_t>& requ
         continue;  // an exact patch as it is: never refined for its own sake
       }
     }
-    bool want = e - b != 4 && k == 0;  // non-quads: always once
+    // Non-quads go down once, and so do the faces next to them: patches need quads all round
+    // their corners.
+    bool force = e - b != 4 && k == 0, want = false;
     for (uint32_t c = b; c < e; ++c) {
       const uint32_t v = R.face_vertices[c];
       tag(v);
       want = want || (L.irregular[v] && L.rem[v] > 0);
-      // Patches need quads all round their corners: faces next to a non-quad go down once too.
-      if (k == 0 && !want)
-        for (uint32_t i = t.vertex_offsets[v]; i < t.vertex_offsets[v + 1] && !want; ++i) {
+      if (k == 0 && !force)
+        for (uint32_t i = t.vertex_offsets[v]; i < t.vertex_offsets[v + 1] && !force; ++i) {
           const uint32_t g = t.corner_face[t.vertex_corners[i]];
-          want = R.face_offsets[g + 1] - R.face_offsets[g] != 4;
+          force = R.face_offsets[g + 1] - R.face_offsets[g] != 4;
         }
     }
-    L.requested[f] = want && k < size_t(kMaxDepth);
+    L.force[f] = force;
+    L.requested[f] = (want || force) && k < size_t(kMaxDepth);
     requested[f] = L.requested[f];
   }
   L.level = &R;
+  if (h_) {  // where each vertex's depth comes from: itself, or what it was made from
+    L.src_offsets.assign(1, 0);
+    auto append = [&](std::initializer_list<uint32_t> from, const Level* P) {
+      const size_t start = L.src.size();
+      for (uint32_t x : from)
+        L.src.insert(L.src.end(), P->src.begin() + P->src_offsets[x],
+                     P->src.begin() + P->src_offsets[x + 1]);
+      std::sort(L.src.begin() + long(start), L.src.end());
+      L.src.erase(std::unique(L.src.begin() + long(start), L.src.end()), L.src.end());
+      L.src_offsets.push_back(uint32_t(L.src.size()));
+    };
+    if (k == 0) {
+      for (uint32_t v = 0; v < nv; ++v) L.src.push_back(v), L.src_offsets.push_back(v + 1);
+    } else {
+      const Level& P = levels_[k - 1];
+      std::vector<uint32_t> corners;
+      for (uint32_t f : S.parent_faces) {
+        const size_t start = L.src.size();
+        for (uint32_t c = P.level->face_offsets[f]; c < P.level->face_offsets[f + 1]; ++c) {
+          const uint32_t x = P.level->face_vertices[c];
+          L.src.insert(L.src.end(), P.src.begin() + P.src_offsets[x],
+                       P.src.begin() + P.src_offsets[x + 1]);
+        }
+        std::sort(L.src.begin() + long(start), L.src.end());
+        L.src.erase(std::unique(L.src.begin() + long(start), L.src.end()), L.src.end());
+        L.src_offsets.push_back(uint32_t(L.src.size()));
+      }
+      for (uint32_t e : S.parent_edges)
+        append({P.level->edge_vertices[2 * size_t(e)], P.level->edge_vertices[2 * size_t(e) + 1]},
+               &P);
+      for (uint32_t v : S.parent_vertices) append({v}, &P);
+    }
+  }
 }
 
 // Gregory end-cap points of one quad (OpenSubdiv's GregoryConverter; see the file comment).
@@ -718,6 +760,7 @@ void Builder::build(PatchTable& out, SparseRefinement& r, PatchStats* stats) {
     stats->gregory_by_level.assign(r.levels.size(), 0);
   }
 
+  std::vector<std::vector<uint32_t>> node_of_level;  // hierarchy: node of each level's faces
   static constexpr int kPos[4][2] = {{1, 1}, {2, 1}, {2, 2}, {1, 2}};
   static constexpr int kD1[4][2] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}};  // towards corner i + 1
   static constexpr int kD2[4][2] = {{0, 1}, {-1, 0}, {0, -1}, {1, 0}};  // towards corner i - 1
@@ -726,10 +769,47 @@ void Builder::build(PatchTable& out, SparseRefinement& r, PatchStats* stats) {
     const RefinedLevel& R = r.levels[k].level;
     const Topology& t = L.topo;
     const uint32_t off = out.level_offsets[k];
+    std::vector<uint32_t>& node_of = node_of_level.emplace_back();
+    if (h_) {
+      // Nodes: every face this level covers; a child of the node of the face it came from.
+      node_of.assign(R.face_count(), kNone);
+      for (uint32_t f = 0; f < R.face_count(); ++f) {
+        if (!L.owned[f]) continue;
+        const uint32_t n = uint32_t(h_->node_level.size());
+        node_of[f] = n;
+        h_->node_level.push_back(uint8_t(k));
+        h_->node_force.push_back(L.force[f]);
+        h_->node_patch.push_back(kNone);
+        h_->node_first_child.push_back(kNone);
+        h_->node_children.push_back(0);
+        h_->node_neighbours.insert(h_->node_neighbours.end(), {kNone, kNone, kNone, kNone});
+        // Depth sources of the irregular corners.
+        const size_t start = h_->node_src.size();
+        for (uint32_t c = R.face_offsets[f]; c < R.face_offsets[f + 1]; ++c) {
+          const uint32_t v = R.face_vertices[c];
+          if (L.irregular[v] && L.crease_edge[f] < 0)
+            h_->node_src.insert(h_->node_src.end(), L.src.begin() + L.src_offsets[v],
+                                L.src.begin() + L.src_offsets[v + 1]);
+        }
+        std::sort(h_->node_src.begin() + long(start), h_->node_src.end());
+        h_->node_src.erase(std::unique(h_->node_src.begin() + long(start), h_->node_src.end()),
+                           h_->node_src.end());
+        h_->node_src_offsets.push_back(uint32_t(h_->node_src.size()));
+        if (k == 0) {
+          h_->roots.push_back(n);
+        } else {
+          const uint32_t parent = node_of_level[k - 1][r.levels[k].face_parent[f]];
+          if (h_->node_first_child[parent] == kNone) h_->node_first_child[parent] = n;
+          ++h_->node_children[parent];
+        }
+      }
+    }
     for (uint32_t f = 0; f < R.face_count(); ++f) {
-      if (!L.owned[f] || L.requested[f]) continue;
-      if (R.face_offsets[f + 1] - R.face_offsets[f] != 4)
+      if (!L.owned[f] || (L.requested[f] && !h_)) continue;
+      if (R.face_offsets[f + 1] - R.face_offsets[f] != 4 || L.force[f]) {
+        if (h_) continue;  // a node without a patch of its own: always refined
         throw std::logic_error("patches: a non-quad face was left unrefined");
+      }
       uint32_t corner[4], a[4];
       aligned_corners(L, R, f, corner);
       const bool crease = L.crease_edge[f] >= 0;
@@ -750,8 +830,13 @@ void Builder::build(PatchTable& out, SparseRefinement& r, PatchStats* stats) {
         if (tw < kNonManifold) {
           const uint32_t g = t.corner_face[tw];
           if (L.owned[g] && L.requested[g]) pp.transition |= uint8_t(1u << e);
+          if (h_ && L.owned[g])
+            h_->node_neighbours[4 * size_t(node_of[f]) + size_t(e)] = node_of[g];
         }
       }
+      if (h_)
+        h_->node_patch[node_of[f]] = regular ? uint32_t(out.regular_params.size())
+                                             : kPatchGregory | uint32_t(out.gregory_params.size());
       if (regular) {
         RingView rings[4];
         Ring spans[4];
@@ -853,6 +938,8 @@ void Builder::build(PatchTable& out, SparseRefinement& r, PatchStats* stats) {
 }  // namespace
 
 std::vector<float> PatchTable::points(std::span<const float> cage) const {
+  if (selection)
+    throw InputError("patches: a selection has no points of its own; use its hierarchy's");
   if (cage.size() != 3 * size_t(level_offsets.at(1)))
     throw InputError(fmt::format("patches: {} cage coordinates for {} points", cage.size(),
                                  3 * size_t(level_offsets.at(1))));
@@ -863,6 +950,74 @@ std::vector<float> PatchTable::points(std::span<const float> cage) const {
                    out.data() + 3 * size_t(level_offsets[k + 1]), 3);
   if (gregory_stencils.size())
     apply_stencils(gregory_stencils, out.data(), out.data() + 3 * size_t(level_offsets.back()), 3);
+  return out;
+}
+
+PatchHierarchy build_patch_hierarchy(const Mesh& cage, const PatchOptions& options) {
+  if (options.depth < 0 || options.depth > 12)
+    throw InputError(fmt::format("patches: depth {} out of range (0-12)", options.depth));
+  PatchHierarchy h;
+  Builder b(cage, options, {}, &h);
+  SparseRefinement r = refine_sparse(
+      cage, options.subdiv,
+      [&](size_t k, const SparseLevel& S, std::vector<uint8_t>& req) { b.request(k, S, req); });
+  b.build(h.table, r, nullptr);
+  return h;
+}
+
+PatchTable select_patches(const PatchHierarchy& h, std::span<const uint8_t> vertex_depth) {
+  const PatchTable& full = h.table;
+  const size_t nv = full.level_offsets.size() > 1 ? full.level_offsets[1] : 0;
+  if (vertex_depth.size() != nv)
+    throw InputError(
+        fmt::format("select patches: {} depths for {} cage vertices", vertex_depth.size(), nv));
+  const size_t nn = h.node_count();
+  // Pass 1: which nodes go deeper.
+  std::vector<uint8_t> refined(nn, 0);
+  std::vector<uint32_t> stack(h.roots.rbegin(), h.roots.rend()), leaves;
+  while (!stack.empty()) {
+    const uint32_t n = stack.back();
+    stack.pop_back();
+    bool deeper = h.node_force[n] != 0;
+    for (uint32_t i = h.node_src_offsets[n]; i < h.node_src_offsets[n + 1] && !deeper; ++i)
+      deeper = vertex_depth[h.node_src[i]] > h.node_level[n];
+    if (deeper && h.node_first_child[n] != kNone) {
+      refined[n] = 1;
+      for (uint32_t c = h.node_children[n]; c-- > 0;) stack.push_back(h.node_first_child[n] + c);
+    } else {
+      if (h.node_patch[n] == kNone) throw std::logic_error("select patches: a node has no patch");
+      leaves.push_back(n);
+    }
+  }
+  // Pass 2: copy the leaves' patches, with their transition bits for this selection.
+  PatchTable out;
+  out.selection = true;
+  out.options = full.options;
+  out.level_offsets = full.level_offsets;
+  out.ptex_count = full.ptex_count;
+  out.ptex_of_face = full.ptex_of_face;
+  for (const uint32_t n : leaves) {
+    const uint32_t p = h.node_patch[n];
+    const bool cap = p & kPatchGregory;
+    const uint32_t i = p & ~kPatchGregory;
+    PatchParam pp = cap ? full.gregory_params[i] : full.regular_params[i];
+    pp.transition = 0;
+    for (int e = 0; e < 4; ++e) {
+      const uint32_t g = h.node_neighbours[4 * size_t(n) + size_t(e)];
+      if (g != kNone && refined[g]) pp.transition |= uint8_t(1u << e);
+    }
+    if (cap) {
+      out.gregory_params.push_back(pp);
+      out.gregory_points.insert(out.gregory_points.end(),
+                                full.gregory_points.begin() + 20 * long(i),
+                                full.gregory_points.begin() + 20 * long(i) + 20);
+    } else {
+      out.regular_params.push_back(pp);
+      out.regular_points.insert(out.regular_points.end(),
+                                full.regular_points.begin() + 16 * long(i),
+                                full.regular_points.begin() + 16 * long(i) + 16);
+    }
+  }
   return out;
 }
 

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <string>
+#include <tuple>
 
 #include "deep_reference.hpp"
 #include "limn/mesh/io.hpp"
@@ -412,6 +413,72 @@ TEST(Patches, SingleCreasePatchesAreExact) {
     }
   }
   EXPECT_GT(total_crease, 0u);
+}
+
+}  // namespace
+}  // namespace limn
+
+namespace limn {
+namespace {
+
+// A view change selects from the hierarchy: the same patches (params, transition bits, points)
+// as building the table for those depths from scratch, and the same surface.
+TEST(Patches, HierarchySelectionEqualsADirectBuild) {
+  std::vector<Mesh> cages = {make_shape("torus"), make_shape("cage"), make_shape("cube")};
+  const std::filesystem::path big = std::filesystem::path(LIMN_SHARED_MODELS) / "quads/bigguy.obj";
+  if (std::filesystem::exists(big)) cages.push_back(read_mesh(big));
+  cages.push_back(test::random_cage(17));
+  test::Rng rng(99);
+  for (size_t ci = 0; ci < cages.size(); ++ci) {
+    const Mesh& cage = cages[ci];
+    PatchOptions po;
+    po.subdiv = subdiv_options(cage);
+    po.depth = 5;
+    const PatchHierarchy h = build_patch_hierarchy(cage, po);
+    const std::vector<float> hp = h.table.points(cage.positions);
+    for (int trial = 0; trial < 3; ++trial) {
+      std::vector<uint8_t> d(cage.vertex_count());
+      for (uint8_t& x : d) x = uint8_t(rng.below(7));  // some above the hierarchy's depth
+      const PatchTable sel = select_patches(h, d);
+      const PatchTable direct = build_patches(cage, po, d);
+      ASSERT_EQ(sel.regular_params.size(), direct.regular_params.size()) << ci;
+      ASSERT_EQ(sel.gregory_params.size(), direct.gregory_params.size()) << ci;
+      auto key = [](const PatchParam& p) {
+        return std::tuple(p.ptex, p.depth, p.u, p.v, int(p.type), p.boundary, p.transition,
+                          p.crease_edge, p.sharpness);
+      };
+      for (const auto which : {&PatchTable::regular_params, &PatchTable::gregory_params}) {
+        std::vector<decltype(key(PatchParam{}))> a, b;
+        for (const PatchParam& p : sel.*which) a.push_back(key(p));
+        for (const PatchParam& p : direct.*which) b.push_back(key(p));
+        std::sort(a.begin(), a.end()), std::sort(b.begin(), b.end());
+        EXPECT_EQ(a, b) << "cage " << ci << " trial " << trial;
+      }
+      // The same surface on a grid of every ptex face.
+      const PatchMap ms(sel), md(direct);
+      const std::vector<float> dp = direct.points(cage.positions);
+      double worst = 0;
+      for (uint32_t p = 0; p < sel.ptex_count; ++p)
+        for (double u : {0.1, 0.5, 0.85})
+          for (double v : {0.2, 0.6, 0.95}) {
+            PatchCoord a, b;
+            try {
+              a = ms.find(p, u, v), b = md.find(p, u, v);
+            } catch (const InputError&) {
+              continue;  // a hole
+            }
+            float x[3], y[3];
+            evaluate_patches(sel, hp, std::span(&a, 1), x);
+            evaluate_patches(direct, dp, std::span(&b, 1), y);
+            worst = std::max(worst, double(std::hypot(x[0] - y[0], x[1] - y[1], x[2] - y[2])));
+          }
+      EXPECT_LT(worst, 1e-6 * bounding_box(cage).diagonal()) << ci;
+    }
+    EXPECT_THROW((void)select_patches(h, {}), InputError);
+    EXPECT_THROW(
+        (void)select_patches(h, std::vector<uint8_t>(cage.vertex_count())).points(cage.positions),
+        InputError);
+  }
 }
 
 }  // namespace

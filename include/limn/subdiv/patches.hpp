@@ -83,11 +83,13 @@ struct PatchTable {
   std::vector<PatchParam> regular_params, gregory_params;
   uint32_t ptex_count = 0;
   std::vector<uint32_t> ptex_of_face;  ///< first ptex face of each cage face (size faces + 1)
+  bool selection = false;              ///< made by select_patches: its points are the hierarchy's
 
   size_t point_count() const { return level_offsets.back() + gregory_stencils.size(); }
   size_t patch_count() const { return regular_params.size() + gregory_params.size(); }
   /// Every point (3 floats each) from the cage positions: refinement level by level, then the
-  /// end-cap points. O(stencil entries).
+  /// end-cap points. O(stencil entries). Throws InputError for a selection (use its
+  /// hierarchy's table).
   std::vector<float> points(std::span<const float> cage_positions) const;
 };
 
@@ -99,6 +101,32 @@ struct PatchTable {
 /// O(patches * ring size); throws InputError for cages limn cannot subdivide.
 PatchTable build_patches(const Mesh& cage, const PatchOptions& options,
                          std::span<const uint8_t> vertex_depth = {}, PatchStats* stats = nullptr);
+
+/// Every patch a cage can need down to a depth, as a tree per cage face (OpenSubdiv's Bfr patch
+/// trees, Brainerd et al. 2016): the patch table of depth d_max everywhere plus, at every level,
+/// a patch (an end cap) over each face that goes deeper. A new view then only selects nodes
+/// (select_patches): nothing is refined again and no stencil is rebuilt.
+struct PatchHierarchy {
+  PatchTable table;             ///< every node's patch; its points serve every selection
+  std::vector<uint32_t> roots;  ///< the node of each covered cage face
+  std::vector<uint8_t> node_level, node_force;  ///< force: always refined (non-quads)
+  std::vector<uint32_t> node_patch;  ///< regular index, or 0x80000000 | end-cap index; or kNone
+  std::vector<uint32_t> node_first_child;  ///< children are consecutive; kNone for leaves
+  std::vector<uint32_t> node_children;
+  std::vector<uint32_t> node_neighbours;  ///< 4 per node: the node across each patch edge
+  std::vector<uint32_t> node_src_offsets{0}, node_src;  ///< cage vertices whose depth refines it
+  size_t node_count() const { return node_level.size(); }
+};
+
+/// Builds the hierarchy down to options.depth (d_max). About build_patches' cost at that depth
+/// plus one end cap per refined face.
+PatchHierarchy build_patch_hierarchy(const Mesh& cage, const PatchOptions& options);
+
+/// The patches of a per-vertex depth (one entry per cage vertex, capped at the hierarchy's
+/// depth): the same patches, transition bits included, as build_patches(cage, {depth = d_max},
+/// vertex_depth). The result has the patch arrays only (no stencils): evaluate it with
+/// hierarchy.table.points(). O(nodes visited), no refinement.
+PatchTable select_patches(const PatchHierarchy& hierarchy, std::span<const uint8_t> vertex_depth);
 
 /// A point on a patch: which patch (regular first, then end caps: index regular_params.size() +
 /// i is end cap i) and patch-local (s, t) in [0, 1]^2.
