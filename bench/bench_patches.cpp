@@ -2,8 +2,9 @@
 // adaptive path in one run (topology + RefineAdaptive + PatchTableFactory with Gregory-basis end
 // caps + the refined-point stencils with the end-cap local points appended), at isolation depths
 // 2, 3, 4, 6 on the FAS cages, the car and pole360. Single thread; medians of `--repeat` runs (one
-// run where OpenSubdiv takes over 5 s).
-//   limn_bench_patches [--repeat N] [--models DIR] [--depths 2,3,4,6]
+// run where OpenSubdiv takes over 5 s). --special: both sides with single-crease and infinitely
+// sharp patches (OpenSubdiv's useSingleCreasePatch / useInfSharpPatch; limn's defaults).
+//   limn_bench_patches [--repeat N] [--models DIR] [--depths 2,3,4,6] [--special]
 #include <fmt/format.h>
 #include <tbb/global_control.h>
 
@@ -47,7 +48,7 @@ struct OsdResult {
   double ms = 0;
 };
 
-OsdResult osd_build(const limn::Mesh& m, int depth) {
+OsdResult osd_build(const limn::Mesh& m, int depth, bool special) {
   const double t0 = now_ms();
   std::vector<int> nvpf, idx(m.face_vertices.begin(), m.face_vertices.end());
   std::vector<int> creases(m.crease_edges.begin(), m.crease_edges.end());
@@ -79,11 +80,13 @@ OsdResult osd_build(const limn::Mesh& m, int depth) {
   std::unique_ptr<Far::TopologyRefiner> r(
       Factory::Create(d, Factory::Options(Sdc::SCHEME_CATMARK, so)));
   Far::TopologyRefiner::AdaptiveOptions ao(depth);
-  ao.useSingleCreasePatch = false;
-  ao.useInfSharpPatch = false;
+  ao.useSingleCreasePatch = special;
+  ao.useInfSharpPatch = special;
   r->RefineAdaptive(ao);
   Far::PatchTableFactory::Options po(depth);
   po.SetEndCapType(Far::PatchTableFactory::Options::ENDCAP_GREGORY_BASIS);
+  po.useSingleCreasePatch = special;
+  po.useInfSharpPatch = special;
   std::unique_ptr<Far::PatchTable> pt(Far::PatchTableFactory::Create(*r, po));
   Far::StencilTableFactory::Options sto;
   sto.generateIntermediateLevels = true;
@@ -106,6 +109,7 @@ OsdResult osd_build(const limn::Mesh& m, int depth) {
 
 int main(int argc, char** argv) {
   int repeat = 3;
+  bool special = false;
   fs::path models = LIMN_SHARED_MODELS;
   std::vector<int> depths = {2, 3, 4, 6};
   for (int i = 1; i < argc; ++i) {
@@ -113,6 +117,8 @@ int main(int argc, char** argv) {
       repeat = std::max(1, std::atoi(argv[++i]));
     else if (!std::strcmp(argv[i], "--models") && i + 1 < argc)
       models = argv[++i];
+    else if (!std::strcmp(argv[i], "--special"))
+      special = true;
     else if (!std::strcmp(argv[i], "--depths") && i + 1 < argc) {
       depths.clear();
       for (const char* p = argv[++i]; *p;) {
@@ -141,12 +147,12 @@ int main(int argc, char** argv) {
         limn::PatchOptions opt;
         opt.subdiv = limn::subdiv_options(m);
         opt.depth = depth;
-        opt.inf_sharp_patches = false;  // like the OpenSubdiv side
+        opt.inf_sharp_patches = opt.single_crease_patches = special;  // as the OpenSubdiv side
         const double t0 = now_ms();
         const limn::PatchTable t = limn::build_patches(m, opt);
         tl.push_back(now_ms() - t0);
         pl = t.patch_count();
-        const OsdResult o = osd_build(m, depth);
+        const OsdResult o = osd_build(m, depth, special);
         to.push_back(o.ms);
         po = o.patches;
         if (o.ms > 5000) break;  // OpenSubdiv's high-valence pathology: one run says enough

@@ -58,9 +58,45 @@ struct Ring {
   bool boundary = false, manifold = true, all_quads = true;
 };
 
+// The corner table the builder walks, made from refine_sparse's own adjacency (no second
+// adjacency build): next/prev in the face, the opposite corner (kNone on a boundary,
+// kNonManifold on an edge of more than two faces), and each vertex's corners.
+struct Topo {
+  std::vector<uint32_t> corner_face, corner_next, corner_prev, corner_twin;
+  std::vector<uint32_t> vertex_offsets, vertex_corners;
+};
+
+Topo make_topo(const RefinedLevel& R, const LevelAdjacency& a) {
+  Topo t;
+  const size_t nc = R.face_vertices.size();
+  t.corner_face.resize(nc), t.corner_next.resize(nc), t.corner_prev.resize(nc);
+  for (uint32_t f = 0; f < R.face_count(); ++f) {
+    const uint32_t b = R.face_offsets[f], e = R.face_offsets[f + 1];
+    for (uint32_t c = b; c < e; ++c) {
+      t.corner_face[c] = f;
+      t.corner_next[c] = c + 1 == e ? b : c + 1;
+      t.corner_prev[c] = c == b ? e - 1 : c - 1;
+    }
+  }
+  t.corner_twin.assign(nc, kNone);
+  const size_t ne = a.edge_corner_offsets.size() - 1;
+  for (size_t e = 0; e < ne; ++e) {
+    const uint32_t lo = a.edge_corner_offsets[e], hi = a.edge_corner_offsets[e + 1];
+    if (hi - lo == 2) {
+      t.corner_twin[a.edge_corners[lo]] = a.edge_corners[lo + 1];
+      t.corner_twin[a.edge_corners[lo + 1]] = a.edge_corners[lo];
+    } else if (hi - lo > 2) {
+      for (uint32_t i = lo; i < hi; ++i) t.corner_twin[a.edge_corners[i]] = kNonManifold;
+    }
+  }
+  t.vertex_offsets.assign(a.vertex_corner_offsets.begin(), a.vertex_corner_offsets.end());
+  t.vertex_corners.assign(a.vertex_corners.begin(), a.vertex_corners.end());
+  return t;
+}
+
 // Per-level state of the isolation.
 struct Level {
-  Topology topo;
+  Topo topo;
   std::vector<float> corner_sharpness;     // sharpness of each corner's edge (by corner)
   std::vector<uint8_t> rem;                // per vertex: levels still wanted around it
   std::vector<uint8_t> irregular;          // per vertex (complete ones only)
@@ -84,7 +120,8 @@ struct Level {
   // + ring_faces[v]), its edge ends ring_edge[ring_at[v] + i] (one more on a boundary).
   std::vector<uint32_t> ring_at, ring_edge, ring_diag, ring_face;
   std::vector<uint16_t> ring_faces;
-  std::vector<uint8_t> ring_flags;  // 1 boundary, 2 manifold, 4 all quads
+  std::vector<uint8_t> ring_flags;    // 1 boundary, 2 manifold, 4 all quads
+  mutable std::vector<uint8_t> cuts;  // cuts_at_inf_sharp per vertex: 0 unknown, 1 no, 2 yes
 };
 
 // A cached ring.
@@ -106,7 +143,8 @@ class Builder {
           PatchHierarchy* h = nullptr)
       : cage_(cage), o_(o), depth_(depth), h_(h) {}
 
-  void request(size_t k, const SparseLevel& S, std::vector<uint8_t>& requested);
+  void request(size_t k, const SparseLevel& S, const LevelAdjacency& adj,
+               std::vector<uint8_t>& requested);
   void build(PatchTable& out, SparseRefinement& r, PatchStats* stats);
 
  private:
@@ -139,7 +177,7 @@ RingView Builder::ring(Level& L, const RefinedLevel& R, uint32_t v) const {
     L.ring_flags.assign(R.vertex_count(), 0);
   }
   if (L.ring_at[v] == kNone) {
-    const Topology& t = L.topo;
+    const Topo& t = L.topo;
     const uint32_t* fv = R.face_vertices.data();
     const uint32_t s0 = t.vertex_offsets[v], n = t.vertex_offsets[v + 1] - s0;
     bool boundary = false, manifold = n > 0, quads = true;
@@ -195,7 +233,7 @@ RingView Builder::ring(Level& L, const RefinedLevel& R, uint32_t v) const {
 }
 
 Builder::SharpEdges Builder::sharp_edges(const Level& L, uint32_t v) const {
-  const Topology& t = L.topo;
+  const Topo& t = L.topo;
   SharpEdges e;
   e.faces = t.vertex_offsets[v + 1] - t.vertex_offsets[v];
   for (uint32_t i = t.vertex_offsets[v]; i < t.vertex_offsets[v + 1]; ++i) {
@@ -219,9 +257,13 @@ Builder::SharpEdges Builder::sharp_edges(const Level& L, uint32_t v) const {
 // edges (OpenSubdiv: the vertex has such edges and is not a dart).
 bool Builder::cuts_at_inf_sharp(const Level& L, const RefinedLevel& R, uint32_t v) const {
   if (!o_.inf_sharp_patches) return false;
-  const SharpEdges e = sharp_edges(L, v);
-  const bool dart = !e.boundary && e.inf + e.semi == 1 && R.vertex_sharpness[v] == 0.0f;
-  return e.inf > 0 && !dart;
+  if (L.cuts.empty()) L.cuts.assign(R.vertex_count(), 0);
+  if (!L.cuts[v]) {
+    const SharpEdges e = sharp_edges(L, v);
+    const bool dart = !e.boundary && e.inf + e.semi == 1 && R.vertex_sharpness[v] == 0.0f;
+    L.cuts[v] = e.inf > 0 && !dart ? 2 : 1;
+  }
+  return L.cuts[v] == 2;
 }
 
 // The fan of faces around a patch corner that a patch sees (OpenSubdiv's corner spans): the
@@ -232,7 +274,7 @@ bool Builder::cuts_at_inf_sharp(const Level& L, const RefinedLevel& R, uint32_t 
 // sharp and legacy corners; with infinitely sharp patches also corners of sharp edges and
 // infinitely sharp vertices).
 Ring Builder::span(const Level& L, const RefinedLevel& R, uint32_t corner, bool& sharp) const {
-  const Topology& t = L.topo;
+  const Topo& t = L.topo;
   const uint32_t* fv = R.face_vertices.data();
   const uint32_t v = fv[corner];
   const uint32_t n = t.vertex_offsets[v + 1] - t.vertex_offsets[v];
@@ -296,7 +338,7 @@ Ring Builder::span(const Level& L, const RefinedLevel& R, uint32_t corner, bool&
 // regular boundary with two faces, corner with one face under the corner rule), with no sharp
 // feature of its own.
 bool Builder::regular_vertex(Level& L, const RefinedLevel& R, uint32_t v) const {
-  const Topology& t = L.topo;
+  const Topo& t = L.topo;
   const RingView g = ring(L, R, v);
   if (!g.manifold || !g.all_quads) return false;
   for (uint32_t i = t.vertex_offsets[v]; i < t.vertex_offsets[v + 1]; ++i) {
@@ -315,7 +357,7 @@ bool Builder::regular_vertex(Level& L, const RefinedLevel& R, uint32_t v) const 
 // crease that goes straight through both of its ends with one sharpness (the two crease edges at
 // each end are opposite in its ring), the other two corners plain. Returns j, or -1.
 int Builder::single_crease(Level& L, const RefinedLevel& R, uint32_t f, float& sharpness) const {
-  const Topology& t = L.topo;
+  const Topo& t = L.topo;
   const uint32_t b = R.face_offsets[f];
   if (R.face_offsets[f + 1] - b != 4) return -1;
   int kind[4];  // 0 plain, 1 crease end, -1 neither
@@ -363,7 +405,7 @@ int Builder::single_crease(Level& L, const RefinedLevel& R, uint32_t f, float& s
 // edges is a regular boundary (two faces, crease rule) or a regular corner (one face, corner
 // rule), with nothing semi-sharp.
 bool Builder::regular_vertex_inf(Level& L, const RefinedLevel& R, uint32_t v) const {
-  const Topology& t = L.topo;
+  const Topo& t = L.topo;
   const RingView g = ring(L, R, v);
   if (!g.manifold || !g.all_quads) return false;
   const SharpEdges e = sharp_edges(L, v);
@@ -387,34 +429,16 @@ void Builder::aligned_corners(const Level& L, const RefinedLevel& R, uint32_t f,
   for (uint32_t s = 0; s < 4; ++s) c[s] = b + (s + 4 - rot) % 4;  // corner ids
 }
 
-void Builder::request(size_t k, const SparseLevel& S, std::vector<uint8_t>& requested) {
+void Builder::request(size_t k, const SparseLevel& S, const LevelAdjacency& adj,
+                      std::vector<uint8_t>& requested) {
   const RefinedLevel& R = S.level;
   const size_t nv = R.vertex_count(), nf = R.face_count();
   Level& L = levels_.emplace_back();
-  L.topo = build_topology(nv, R.face_offsets, R.face_vertices);
-  const Topology& t = L.topo;
-
-  // Sharpness per corner: the level numbers its edges its own way.
-  {
-    std::vector<uint32_t> off(nv + 1, 0);
-    const size_t ne = R.edge_count();
-    for (size_t e = 0; e < ne; ++e) ++off[R.edge_vertices[2 * e] + 1];
-    for (size_t v = 0; v < nv; ++v) off[v + 1] += off[v];
-    std::vector<uint32_t> fill(off.begin(), off.end() - 1), edges(ne);
-    for (size_t e = 0; e < ne; ++e) edges[fill[R.edge_vertices[2 * e]]++] = uint32_t(e);
-    auto find = [&](uint32_t a, uint32_t b) -> float {
-      for (uint32_t i = off[a]; i < off[a + 1]; ++i)
-        if (R.edge_vertices[2 * size_t(edges[i]) + 1] == b) return R.edge_sharpness[edges[i]];
-      return -1.0f;
-    };
-    L.corner_sharpness.resize(t.corner_face.size());
-    for (size_t c = 0; c < t.corner_face.size(); ++c) {
-      const uint32_t a = R.face_vertices[c], b = R.face_vertices[t.corner_next[c]];
-      float s = find(a, b);
-      if (s < 0.0f) s = find(b, a);
-      L.corner_sharpness[c] = std::max(s, 0.0f);
-    }
-  }
+  L.topo = make_topo(R, adj);
+  const Topo& t = L.topo;
+  L.corner_sharpness.resize(R.face_vertices.size());
+  for (size_t c = 0; c < R.face_vertices.size(); ++c)
+    L.corner_sharpness[c] = R.edge_sharpness[adj.corner_edge[c]];
 
   // Depth wanted around each vertex.
   L.rem.assign(nv, 0);
@@ -569,6 +593,16 @@ class GregoryCap {
   Corner c[4];
   Terms p[4], ep[4], em[4], fp[4], fm[4];
 
+  // Ready for another patch, keeping the buffers.
+  void reset() {
+    for (int i = 0; i < 4; ++i) {
+      std::vector<uint32_t> ring = std::move(c[i].ring);
+      ring.clear();
+      c[i] = Corner{};
+      c[i].ring = std::move(ring);
+      for (Terms* t : {&p[i], &ep[i], &em[i], &fp[i], &fm[i]}) t->t.clear();
+    }
+  }
   void finish_topology();
   void compute();
 
@@ -761,13 +795,14 @@ void Builder::build(PatchTable& out, SparseRefinement& r, PatchStats* stats) {
   }
 
   std::vector<std::vector<uint32_t>> node_of_level;  // hierarchy: node of each level's faces
+  GregoryCap cap;                                    // reused: its buffers stay allocated
   static constexpr int kPos[4][2] = {{1, 1}, {2, 1}, {2, 2}, {1, 2}};
   static constexpr int kD1[4][2] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}};  // towards corner i + 1
   static constexpr int kD2[4][2] = {{0, 1}, {-1, 0}, {0, -1}, {1, 0}};  // towards corner i - 1
   for (size_t k = 0; k < r.levels.size(); ++k) {
     Level& L = levels_[k];
     const RefinedLevel& R = r.levels[k].level;
-    const Topology& t = L.topo;
+    const Topo& t = L.topo;
     const uint32_t off = out.level_offsets[k];
     std::vector<uint32_t>& node_of = node_of_level.emplace_back();
     if (h_) {
@@ -904,7 +939,7 @@ void Builder::build(PatchTable& out, SparseRefinement& r, PatchStats* stats) {
         if (stats) ++stats->regular_by_level[k];
       } else {
         pp.type = PatchType::gregory;
-        GregoryCap cap;
+        cap.reset();
         for (int i = 0; i < 4; ++i) {
           GregoryCap::Corner& cc = cap.c[i];
           const Ring g = span(L, R, corner[i], cc.sharp);
@@ -958,9 +993,9 @@ PatchHierarchy build_patch_hierarchy(const Mesh& cage, const PatchOptions& optio
     throw InputError(fmt::format("patches: depth {} out of range (0-12)", options.depth));
   PatchHierarchy h;
   Builder b(cage, options, {}, &h);
-  SparseRefinement r = refine_sparse(
-      cage, options.subdiv,
-      [&](size_t k, const SparseLevel& S, std::vector<uint8_t>& req) { b.request(k, S, req); });
+  SparseRefinement r = refine_sparse(cage, options.subdiv,
+                                     [&](size_t k, const SparseLevel& S, const LevelAdjacency& a,
+                                         std::vector<uint8_t>& req) { b.request(k, S, a, req); });
   b.build(h.table, r, nullptr);
   return h;
 }
@@ -1030,9 +1065,9 @@ PatchTable build_patches(const Mesh& cage, const PatchOptions& options,
                                  cage.vertex_count()));
   const auto t0 = std::chrono::steady_clock::now();
   Builder b(cage, options, vertex_depth);
-  SparseRefinement r = refine_sparse(
-      cage, options.subdiv,
-      [&](size_t k, const SparseLevel& S, std::vector<uint8_t>& req) { b.request(k, S, req); });
+  SparseRefinement r = refine_sparse(cage, options.subdiv,
+                                     [&](size_t k, const SparseLevel& S, const LevelAdjacency& a,
+                                         std::vector<uint8_t>& req) { b.request(k, S, a, req); });
   if (stats) *stats = {}, stats->refine_ms = ms_since(t0);
   PatchTable out;
   b.build(out, r, stats);

@@ -1266,7 +1266,8 @@ SparseRefinement refine_sparse(const Mesh& cage, std::span<const uint8_t> vertex
   std::copy(vertex_depth.begin(), vertex_depth.end(), vd.begin());
   std::copy(face_depth.begin(), face_depth.end(), fd.begin());
   // A face is requested while it, or one of its vertices, has levels left.
-  auto request = [](size_t, const SparseLevel& P, std::vector<uint8_t>& requested) {
+  auto request = [](size_t, const SparseLevel& P, const LevelAdjacency&,
+                    std::vector<uint8_t>& requested) {
     const RefinedLevel& PL = P.level;
     for (size_t f = 0; f < PL.face_count(); ++f) {
       bool want = P.face_depth[f] > 0;
@@ -1314,7 +1315,8 @@ SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& optio
     std::vector<uint8_t> near(nv, 0);
     bool any = false;
     requested.assign(nf, 0);
-    request(k, P, requested);
+    const LevelAdjacency view{t.corner_edge, t.eco, t.ec, t.vco, t.vc};
+    request(k, P, view, requested);
     for (uint32_t f = 0; f < nf; ++f) {
       if (!requested[f]) continue;
       any = true;

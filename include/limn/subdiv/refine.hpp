@@ -150,13 +150,24 @@ struct SparseRefinement {
 SparseRefinement refine_sparse(const Mesh& cage, std::span<const uint8_t> vertex_depth,
                                std::span<const uint8_t> face_depth, const SubdivOptions& options);
 
+/// A sparse level's adjacency as refine_sparse has it (valid during the request call only).
+/// Corners are indices into the level's face_vertices; edges are the level's edge list.
+struct LevelAdjacency {
+  std::span<const uint32_t> corner_edge;  ///< per corner: the edge of its outgoing half-edge
+  std::span<const uint32_t> edge_corner_offsets, edge_corners;      ///< edge -> corners on it
+  std::span<const uint32_t> vertex_corner_offsets, vertex_corners;  ///< vertex -> its corners
+};
+
 /// Decides which faces of a sparse level to refine: called once per level (0 = the cage) with
-/// the level built so far; sets requested[f] = 1 (requested arrives sized to the level's faces,
-/// all 0) for each face to refine. Faces sharing a vertex with a requested face are refined
-/// too, so each requested face's children have complete vertices. No request ends the
-/// refinement; requests past level 16 throw InputError.
-using SparseRequest = std::function<void(size_t level, const SparseLevel& level_so_far,
-                                         std::vector<uint8_t>& requested)>;
+/// the level built so far and its adjacency; sets requested[f] = 1 (requested arrives sized to
+/// the level's faces, all 0) for each face to refine. Faces sharing a vertex with a requested
+/// face are refined too, so each requested face's children have complete vertices. No request
+/// ends the refinement; requests past level 16 throw InputError. The levels stay where they are
+/// in memory while the refinement runs (they are reserved up front), so a caller may keep
+/// pointers to earlier ones.
+using SparseRequest =
+    std::function<void(size_t level, const SparseLevel& level_so_far,
+                       const LevelAdjacency& adjacency, std::vector<uint8_t>& requested)>;
 
 /// Sparse refinement driven level by level (feature-adaptive isolation decides from each
 /// level's own topology and sharpness). SparseLevel::vertex_depth and face_depth stay 0.
