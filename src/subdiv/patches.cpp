@@ -339,6 +339,17 @@ Ring Builder::span(const Level& L, const RefinedLevel& R, uint32_t corner, bool&
 // feature of its own.
 bool Builder::regular_vertex(Level& L, const RefinedLevel& R, uint32_t v) const {
   const Topo& t = L.topo;
+  // The common case without walking the ring: four faces, none across a boundary or a torn
+  // edge, no sharpness (refined levels are all quads).
+  if (R.vertex_sharpness[v] == 0.0f && t.vertex_offsets[v + 1] - t.vertex_offsets[v] == 4 &&
+      R.face_offsets.size() == 4 * R.face_count() + 1) {
+    bool plain = true;
+    for (uint32_t i = t.vertex_offsets[v]; i < t.vertex_offsets[v + 1] && plain; ++i) {
+      const uint32_t c = t.vertex_corners[i], tw = t.corner_twin[c];
+      plain = tw < kNonManifold && R.face_vertices[tw] != v && L.corner_sharpness[c] == 0.0f;
+    }
+    if (plain) return true;
+  }
   const RingView g = ring(L, R, v);
   if (!g.manifold || !g.all_quads) return false;
   for (uint32_t i = t.vertex_offsets[v]; i < t.vertex_offsets[v + 1]; ++i) {
