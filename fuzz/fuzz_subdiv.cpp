@@ -3,6 +3,7 @@
 // and per-vertex depth) that tiles every ptex face, or throw InputError; never
 // crash, never break an internal invariant (std::logic_error escapes and is a finding). The lean
 // path must also reproduce the full refinement's points exactly.
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <string_view>
@@ -11,6 +12,7 @@
 #include "limn/mesh/io.hpp"
 #include "limn/subdiv/patches.hpp"
 #include "limn/subdiv/refine.hpp"
+#include "limn/subdiv/tessellate.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string_view in(reinterpret_cast<const char*>(data), size);
@@ -55,7 +57,17 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       }
       std::vector<float> pos(3 * coords.size()), du(pos.size()), dv(pos.size());
       limn::evaluate_patches(t, pts, coords, pos.data(), du.data(), dv.data());
+      limn::TessellateOptions to;
+      to.factor = 2;
+      const limn::Mesh tess = limn::tessellate_patches(m, t, pts, to);
+      for (float x : tess.positions)
+        if (!std::isfinite(x)) __builtin_trap();
     }
+    // A view change from the hierarchy gives what a direct build gives.
+    const limn::PatchHierarchy h = limn::build_patch_hierarchy(m, po);
+    const limn::PatchTable sel = limn::select_patches(h, vd);
+    const limn::PatchTable direct = limn::build_patches(m, po, vd);
+    if (sel.patch_count() != direct.patch_count()) __builtin_trap();
   } catch (const limn::InputError&) {
   }
   return 0;
