@@ -137,6 +137,42 @@ struct RingView {
   }
 };
 
+// Gregory end-cap points of one quad (OpenSubdiv's GregoryConverter; see the file comment).
+class GregoryCap {
+ public:
+  struct Corner {
+    uint32_t v = 0;              // global point id
+    std::vector<uint32_t> ring;  // global ids: edge end 2m, face diagonal 2m + 1
+    int faces = 0, face_in_ring = 0, valence = 0;
+    bool boundary = false, sharp = false, regular = false;
+    bool ep_on_boundary = false, em_on_boundary = false;
+    bool fp_regular = false, fm_regular = false, fp_copied = false, fm_copied = false;
+    double cos_angle = 0;
+  };
+
+  Corner c[4];
+  Terms p[4], ep[4], em[4], fp[4], fm[4];
+
+  // Ready for another patch, keeping the buffers.
+  void reset() {
+    for (int i = 0; i < 4; ++i) {
+      std::vector<uint32_t> ring = std::move(c[i].ring);
+      ring.clear();
+      c[i] = Corner{};
+      c[i].ring = std::move(ring);
+      for (Terms* t : {&p[i], &ep[i], &em[i], &fp[i], &fm[i]}) t->t.clear();
+    }
+  }
+  void finish_topology();
+  void compute();
+
+ private:
+  void edge_points(int i);
+  void face_points(int i);
+  void irregular_face_point(int near, int edge, int far, const Terms& e_near, const Terms& e_far,
+                            double sign, Terms& out) const;
+};
+
 class Builder {
  public:
   Builder(const Mesh& cage, const PatchOptions& o, std::span<const uint8_t> depth,
@@ -146,6 +182,7 @@ class Builder {
   void request(size_t k, const SparseLevel& S, const LevelAdjacency& adj,
                std::vector<uint8_t>& requested);
   void build(PatchTable& out, SparseRefinement& r, PatchStats* stats);
+  void set_stats(PatchStats* stats) { stats_ = stats; }
 
  private:
   RingView ring(Level& L, const RefinedLevel& R, uint32_t v) const;
@@ -168,6 +205,15 @@ class Builder {
   std::vector<Level> levels_;
   uint32_t ptex_count_ = 0;
   PatchHierarchy* h_;
+  // Filled level by level as the refinement runs (each level's patches are emitted as soon as
+  // its requests are known, then its walking data is dropped).
+  void emit(size_t k, const SparseLevel& S);
+  PatchTable out_;
+  PatchStats* stats_ = nullptr;
+  double emit_ms_ = 0;
+  uint32_t level_start_ = 0;                          // global id of this level's first point
+  std::vector<std::vector<uint32_t>> node_of_level_;  // hierarchy: node of each level's faces
+  GregoryCap cap_;                                    // reused: its buffers stay allocated
 };
 
 RingView Builder::ring(Level& L, const RefinedLevel& R, uint32_t v) const {
@@ -587,42 +633,18 @@ void Builder::request(size_t k, const SparseLevel& S, const LevelAdjacency& adj,
       for (uint32_t v : S.parent_vertices) append({v}, &P);
     }
   }
-}
-
-// Gregory end-cap points of one quad (OpenSubdiv's GregoryConverter; see the file comment).
-class GregoryCap {
- public:
-  struct Corner {
-    uint32_t v = 0;              // global point id
-    std::vector<uint32_t> ring;  // global ids: edge end 2m, face diagonal 2m + 1
-    int faces = 0, face_in_ring = 0, valence = 0;
-    bool boundary = false, sharp = false, regular = false;
-    bool ep_on_boundary = false, em_on_boundary = false;
-    bool fp_regular = false, fm_regular = false, fp_copied = false, fm_copied = false;
-    double cos_angle = 0;
-  };
-  Corner c[4];
-  Terms p[4], ep[4], em[4], fp[4], fm[4];
-
-  // Ready for another patch, keeping the buffers.
-  void reset() {
-    for (int i = 0; i < 4; ++i) {
-      std::vector<uint32_t> ring = std::move(c[i].ring);
-      ring.clear();
-      c[i] = Corner{};
-      c[i].ring = std::move(ring);
-      for (Terms* t : {&p[i], &ep[i], &em[i], &fp[i], &fm[i]}) t->t.clear();
-    }
+  emit(k, S);
+  // What the next level needs stays (depths, requests, placement, sources); the rest goes.
+  L.topo = {};
+  L.ring_at = {}, L.ring_edge = {}, L.ring_diag = {}, L.ring_face = {};
+  L.ring_faces = {}, L.ring_flags = {}, L.cuts = {};
+  L.corner_sharpness = {}, L.irregular = {}, L.owned = {}, L.crease_edge = {};
+  L.crease_sharpness = {}, L.force = {};
+  if (k > 0) {
+    Level& P = levels_[k - 1];
+    P.rem = {}, P.requested = {}, P.param = {}, P.src = {}, P.src_offsets = {};
   }
-  void finish_topology();
-  void compute();
-
- private:
-  void edge_points(int i);
-  void face_points(int i);
-  void irregular_face_point(int near, int edge, int far, const Terms& e_near, const Terms& e_far,
-                            double sign, Terms& out) const;
-};
+}
 
 void GregoryCap::finish_topology() {
   const double pi = std::numbers::pi;
@@ -786,35 +808,23 @@ void GregoryCap::compute() {
   for (int i = 0; i < 4; ++i) face_points(i);
 }
 
-void Builder::build(PatchTable& out, SparseRefinement& r, PatchStats* stats) {
+void Builder::emit(size_t k, const SparseLevel& S) {
   const auto t0 = std::chrono::steady_clock::now();
-  out.options = o_.subdiv;
-  out.level_offsets.assign(1, 0);
-  for (const SparseLevel& S : r.levels)
-    out.level_offsets.push_back(out.level_offsets.back() + uint32_t(S.level.vertex_count()));
-  out.level_stencils = std::move(r.stencils);
-  out.ptex_count = ptex_count_;
-  out.ptex_of_face.assign(1, 0);
-  for (size_t f = 0; f < cage_.face_count(); ++f) {
-    const uint32_t n = uint32_t(cage_.face_size(f));
-    out.ptex_of_face.push_back(out.ptex_of_face.back() + (n == 4 ? 1 : n));
+  PatchTable& out = out_;
+  PatchStats* stats = stats_;
+  if (stats && stats->regular_by_level.size() <= k) {
+    stats->regular_by_level.resize(k + 1, 0);
+    stats->gregory_by_level.resize(k + 1, 0);
   }
-  const uint32_t cap_base = out.level_offsets.back();
-  if (stats) {
-    stats->regular_by_level.assign(r.levels.size(), 0);
-    stats->gregory_by_level.assign(r.levels.size(), 0);
-  }
-
-  std::vector<std::vector<uint32_t>> node_of_level;  // hierarchy: node of each level's faces
-  GregoryCap cap;                                    // reused: its buffers stay allocated
+  std::vector<std::vector<uint32_t>>& node_of_level = node_of_level_;
   static constexpr int kPos[4][2] = {{1, 1}, {2, 1}, {2, 2}, {1, 2}};
   static constexpr int kD1[4][2] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}};  // towards corner i + 1
   static constexpr int kD2[4][2] = {{0, 1}, {-1, 0}, {0, -1}, {1, 0}};  // towards corner i - 1
-  for (size_t k = 0; k < r.levels.size(); ++k) {
+  {
     Level& L = levels_[k];
-    const RefinedLevel& R = r.levels[k].level;
+    const RefinedLevel& R = S.level;
     const Topo& t = L.topo;
-    const uint32_t off = out.level_offsets[k];
+    const uint32_t off = level_start_;
     std::vector<uint32_t>& node_of = node_of_level.emplace_back();
     if (h_) {
       // Nodes: every face this level covers; a child of the node of the face it came from.
@@ -844,7 +854,7 @@ void Builder::build(PatchTable& out, SparseRefinement& r, PatchStats* stats) {
         if (k == 0) {
           h_->roots.push_back(n);
         } else {
-          const uint32_t parent = node_of_level[k - 1][r.levels[k].face_parent[f]];
+          const uint32_t parent = node_of_level[k - 1][S.face_parent[f]];
           if (h_->node_first_child[parent] == kNone) h_->node_first_child[parent] = n;
           ++h_->node_children[parent];
         }
@@ -950,6 +960,7 @@ void Builder::build(PatchTable& out, SparseRefinement& r, PatchStats* stats) {
         if (stats) ++stats->regular_by_level[k];
       } else {
         pp.type = PatchType::gregory;
+        GregoryCap& cap = cap_;
         cap.reset();
         for (int i = 0; i < 4; ++i) {
           GregoryCap::Corner& cc = cap.c[i];
@@ -965,7 +976,7 @@ void Builder::build(PatchTable& out, SparseRefinement& r, PatchStats* stats) {
         }
         cap.finish_topology();
         cap.compute();
-        const uint32_t first = cap_base + uint32_t(out.gregory_stencils.size());
+        const uint32_t first = uint32_t(out.gregory_stencils.size());
         for (int i = 0; i < 4; ++i)
           for (Terms* row : {&cap.p[i], &cap.ep[i], &cap.em[i], &cap.fp[i], &cap.fm[i]})
             row->emit(out.gregory_stencils);
@@ -975,9 +986,32 @@ void Builder::build(PatchTable& out, SparseRefinement& r, PatchStats* stats) {
       }
     }
   }
+  level_start_ += uint32_t(S.level.vertex_count());
+  emit_ms_ += ms_since(t0);
+}
+
+void Builder::build(PatchTable& out, SparseRefinement& r, PatchStats* stats) {
+  const auto t0 = std::chrono::steady_clock::now();
+  out = std::move(out_);
+  out.options = o_.subdiv;
+  out.level_offsets.assign(1, 0);
+  for (const SparseLevel& S : r.levels)
+    out.level_offsets.push_back(out.level_offsets.back() + uint32_t(S.level.vertex_count()));
+  out.level_stencils = std::move(r.stencils);
+  out.ptex_count = ptex_count_;
+  out.ptex_of_face.assign(1, 0);
+  for (size_t f = 0; f < cage_.face_count(); ++f) {
+    const uint32_t n = uint32_t(cage_.face_size(f));
+    out.ptex_of_face.push_back(out.ptex_of_face.back() + (n == 4 ? 1 : n));
+  }
+  // End-cap points come after every level's: their ids were counted from 0.
+  const uint32_t cap_base = out.level_offsets.back();
+  for (uint32_t& p : out.gregory_points) p += cap_base;
   if (stats) {
+    stats->regular_by_level.resize(r.levels.size(), 0);
+    stats->gregory_by_level.resize(r.levels.size(), 0);
     stats->points = out.point_count();
-    stats->patches_ms = ms_since(t0);
+    stats->patches_ms = emit_ms_ + ms_since(t0);
   }
 }
 
@@ -1075,13 +1109,16 @@ PatchTable build_patches(const Mesh& cage, const PatchOptions& options,
     throw InputError(fmt::format("patches: {} vertex depths for {} vertices", vertex_depth.size(),
                                  cage.vertex_count()));
   const auto t0 = std::chrono::steady_clock::now();
+  if (stats) *stats = {};
   Builder b(cage, options, vertex_depth);
+  b.set_stats(stats);
   SparseRefinement r = refine_sparse(cage, options.subdiv,
                                      [&](size_t k, const SparseLevel& S, const LevelAdjacency& a,
                                          std::vector<uint8_t>& req) { b.request(k, S, a, req); });
-  if (stats) *stats = {}, stats->refine_ms = ms_since(t0);
   PatchTable out;
   b.build(out, r, stats);
+  // Patches are emitted while the refinement runs: refine_ms is the rest.
+  if (stats) stats->refine_ms = ms_since(t0) - stats->patches_ms;
   return out;
 }
 
