@@ -23,10 +23,11 @@ double dot3(const double a[3], const double b[3]) {
 // (2026-12-01): the largest ratio of the end-cap error (at equal parameters, against a
 // reference at depth 12) to D_v r^d over random tori at depths 1-6 was flat in d: 0.052
 // (n = 3), 0.051 (5), 0.093 (6), 0.105 (7), 0.207 (8), 0.120 (9), 0.145 (10, 11), 0.200 (12);
-// 0.52 on the crease cage. The constants are those times 1.25, and at least 0.25 from n = 8 up
-// (the spread there says the samples are few).
-constexpr double kSmooth[10] = {0.065, 0.065, 0.065, 0.12, 0.13, 0.26, 0.25, 0.25, 0.25, 0.25};
-constexpr double kOther = 0.65;
+// 0.52 on the crease cage. The constants are those maxima (at least 0.2 from n = 8 up, where
+// the spread says the samples are few); the deep-reference test bounds the result (the errors
+// it measures stay at 0.16-0.66 of the tolerance, since D_v is a maximum over the ring).
+constexpr double kSmooth[10] = {0.052, 0.052, 0.052, 0.093, 0.105, 0.207, 0.2, 0.2, 0.2, 0.2};
+constexpr double kOther = 0.52;
 
 }  // namespace
 
