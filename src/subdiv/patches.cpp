@@ -417,6 +417,9 @@ int Builder::single_crease(Level& L, const RefinedLevel& R, uint32_t f, float& s
   const Topo& t = L.topo;
   const uint32_t b = R.face_offsets[f];
   if (R.face_offsets[f + 1] - b != 4) return -1;
+  bool any = false;  // the crease runs along one of the face's own edges
+  for (uint32_t i = 0; i < 4 && !any; ++i) any = L.corner_sharpness[b + i] > 0.0f;
+  if (!any) return -1;
   int kind[4];  // 0 plain, 1 crease end, -1 neither
   float s_at[4] = {};
   for (uint32_t i = 0; i < 4; ++i) {
@@ -463,6 +466,16 @@ int Builder::single_crease(Level& L, const RefinedLevel& R, uint32_t f, float& s
 // rule), with nothing semi-sharp.
 bool Builder::regular_vertex_inf(Level& L, const RefinedLevel& R, uint32_t v) const {
   const Topo& t = L.topo;
+  // The common case first, as in regular_vertex: four plain interior faces.
+  if (R.vertex_sharpness[v] == 0.0f && t.vertex_offsets[v + 1] - t.vertex_offsets[v] == 4 &&
+      R.face_offsets.size() == 4 * R.face_count() + 1) {
+    bool plain = true;
+    for (uint32_t i = t.vertex_offsets[v]; i < t.vertex_offsets[v + 1] && plain; ++i) {
+      const uint32_t c = t.vertex_corners[i], tw = t.corner_twin[c];
+      plain = tw < kNonManifold && R.face_vertices[tw] != v && L.corner_sharpness[c] == 0.0f;
+    }
+    if (plain) return true;
+  }
   const RingView g = ring(L, R, v);
   if (!g.manifold || !g.all_quads) return false;
   const SharpEdges e = sharp_edges(L, v);
