@@ -15,31 +15,16 @@
 #include <filesystem>
 #include <memory>
 
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wshadow"
-#pragma GCC diagnostic ignored "-Wconversion"
-#pragma GCC diagnostic ignored "-Wunused-parameter"
-#include <opensubdiv/bfr/refinerSurfaceFactory.h>
-#include <opensubdiv/bfr/surface.h>
-#include <opensubdiv/far/patchMap.h>
-#include <opensubdiv/far/patchTableFactory.h>
-#include <opensubdiv/far/primvarRefiner.h>
-#include <opensubdiv/far/topologyDescriptor.h>
-#pragma GCC diagnostic pop
+#include "osd_bench.hpp"
 
 #include "limn/mesh/io.hpp"
 #include "limn/subdiv/patches.hpp"
 
 using namespace OpenSubdiv;
+using limn::bench::now_ms;
 namespace fs = std::filesystem;
 
 namespace {
-
-double now_ms() {
-  return std::chrono::duration<double, std::milli>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
 
 template <class F>
 double median_ms(F&& f) {
@@ -58,23 +43,6 @@ struct P3 {
   void Clear(void* = nullptr) { x = y = z = 0; }
   void AddWithWeight(const P3& p, float w) { x += w * p.x, y += w * p.y, z += w * p.z; }
 };
-
-std::unique_ptr<Far::TopologyRefiner> refiner(const limn::Mesh& m) {
-  static std::vector<int> nvpf, idx;
-  nvpf.clear();
-  for (size_t f = 0; f < m.face_count(); ++f) nvpf.push_back(int(m.face_size(f)));
-  idx.assign(m.face_vertices.begin(), m.face_vertices.end());
-  Far::TopologyDescriptor d;
-  d.numVertices = int(m.vertex_count());
-  d.numFaces = int(m.face_count());
-  d.numVertsPerFace = nvpf.data();
-  d.vertIndicesPerFace = idx.data();
-  Sdc::Options so;
-  so.SetVtxBoundaryInterpolation(Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER);
-  using Factory = Far::TopologyRefinerFactory<Far::TopologyDescriptor>;
-  return std::unique_ptr<Far::TopologyRefiner>(
-      Factory::Create(d, Factory::Options(Sdc::SCHEME_CATMARK, so)));
-}
 
 }  // namespace
 
@@ -117,7 +85,7 @@ int main(int argc, char** argv) {
     limn2 = median_ms(limn_run);
 
     // Far.
-    auto far_refiner = refiner(cage);
+    auto far_refiner = limn::bench::osd_refiner(cage);
     Far::TopologyRefiner::AdaptiveOptions ao(depth);
     far_refiner->RefineAdaptive(ao);
     Far::PatchTableFactory::Options fo(depth);
@@ -158,7 +126,7 @@ int main(int argc, char** argv) {
     });
 
     // Bfr.
-    auto bfr_refiner = refiner(cage);
+    auto bfr_refiner = limn::bench::osd_refiner(cage);
     const Bfr::RefinerSurfaceFactory<> factory(*bfr_refiner);
     const double bfr_ms = median_ms([&] {
       Bfr::Surface<float> surface;

@@ -15,33 +15,17 @@
 #include <string>
 #include <vector>
 
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wshadow"
-#pragma GCC diagnostic ignored "-Wconversion"
-#pragma GCC diagnostic ignored "-Wunused-parameter"
-#include <opensubdiv/far/patchTableFactory.h>
-#include <opensubdiv/far/stencilTableFactory.h>
-#include <opensubdiv/far/topologyDescriptor.h>
-#pragma GCC diagnostic pop
+#include "osd_bench.hpp"
 
 #include "limn/mesh/io.hpp"
 #include "limn/subdiv/patches.hpp"
 
 using namespace OpenSubdiv;
+using limn::bench::median;
+using limn::bench::now_ms;
 namespace fs = std::filesystem;
 
 namespace {
-
-double now_ms() {
-  return std::chrono::duration<double, std::milli>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
 
 struct OsdResult {
   size_t patches = 0;
@@ -50,35 +34,7 @@ struct OsdResult {
 
 OsdResult osd_build(const limn::Mesh& m, int depth, bool special) {
   const double t0 = now_ms();
-  std::vector<int> nvpf, idx(m.face_vertices.begin(), m.face_vertices.end());
-  std::vector<int> creases(m.crease_edges.begin(), m.crease_edges.end());
-  std::vector<int> corners(m.corner_vertices.begin(), m.corner_vertices.end());
-  std::vector<int> holes(m.hole_faces.begin(), m.hole_faces.end());
-  for (size_t f = 0; f < m.face_count(); ++f) nvpf.push_back(int(m.face_size(f)));
-  Far::TopologyDescriptor d;
-  d.numVertices = int(m.vertex_count());
-  d.numFaces = int(m.face_count());
-  d.numVertsPerFace = nvpf.data();
-  d.vertIndicesPerFace = idx.data();
-  d.numCreases = int(m.crease_sharpness.size());
-  d.creaseVertexIndexPairs = creases.data();
-  d.creaseWeights = m.crease_sharpness.data();
-  d.numCorners = int(corners.size());
-  d.cornerVertexIndices = corners.data();
-  d.cornerWeights = m.corner_sharpness.data();
-  d.numHoles = int(holes.size());
-  d.holeIndices = holes.data();
-  Sdc::Options so;
-  const limn::SubdivOptions lo = limn::subdiv_options(m);
-  so.SetVtxBoundaryInterpolation(lo.boundary == limn::BoundaryInterpolation::edge_only
-                                     ? Sdc::Options::VTX_BOUNDARY_EDGE_ONLY
-                                     : Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER);
-  so.SetCreasingMethod(lo.crease_method == limn::CreaseMethod::chaikin
-                           ? Sdc::Options::CREASE_CHAIKIN
-                           : Sdc::Options::CREASE_UNIFORM);
-  using Factory = Far::TopologyRefinerFactory<Far::TopologyDescriptor>;
-  std::unique_ptr<Far::TopologyRefiner> r(
-      Factory::Create(d, Factory::Options(Sdc::SCHEME_CATMARK, so)));
+  std::unique_ptr<Far::TopologyRefiner> r = limn::bench::osd_refiner(m);
   Far::TopologyRefiner::AdaptiveOptions ao(depth);
   ao.useSingleCreasePatch = special;
   ao.useInfSharpPatch = special;

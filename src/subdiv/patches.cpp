@@ -380,22 +380,27 @@ Ring Builder::span(const Level& L, const RefinedLevel& R, uint32_t corner, bool&
   return g;
 }
 
+// The common regular case, told without walking the ring: four faces (refined levels are all
+// quads), none across a boundary or a torn edge, no sharpness.
+bool plain_interior(const Level& L, const RefinedLevel& R, uint32_t v) {
+  const Topo& t = L.topo;
+  if (R.vertex_sharpness[v] != 0.0f || t.vertex_offsets[v + 1] - t.vertex_offsets[v] != 4 ||
+      R.face_offsets.size() != 4 * R.face_count() + 1)
+    return false;
+  for (uint32_t i = t.vertex_offsets[v]; i < t.vertex_offsets[v + 1]; ++i) {
+    const uint32_t c = t.vertex_corners[i], tw = t.corner_twin[c];
+    if (tw >= kNonManifold || R.face_vertices[tw] == v || L.corner_sharpness[c] != 0.0f)
+      return false;
+  }
+  return true;
+}
+
 // Regular: the limit surface around the vertex is the B-spline of its ring (interior valence 4,
 // regular boundary with two faces, corner with one face under the corner rule), with no sharp
 // feature of its own.
 bool Builder::regular_vertex(Level& L, const RefinedLevel& R, uint32_t v) const {
   const Topo& t = L.topo;
-  // The common case without walking the ring: four faces, none across a boundary or a torn
-  // edge, no sharpness (refined levels are all quads).
-  if (R.vertex_sharpness[v] == 0.0f && t.vertex_offsets[v + 1] - t.vertex_offsets[v] == 4 &&
-      R.face_offsets.size() == 4 * R.face_count() + 1) {
-    bool plain = true;
-    for (uint32_t i = t.vertex_offsets[v]; i < t.vertex_offsets[v + 1] && plain; ++i) {
-      const uint32_t c = t.vertex_corners[i], tw = t.corner_twin[c];
-      plain = tw < kNonManifold && R.face_vertices[tw] != v && L.corner_sharpness[c] == 0.0f;
-    }
-    if (plain) return true;
-  }
+  if (plain_interior(L, R, v)) return true;
   const RingView g = ring(L, R, v);
   if (!g.manifold || !g.all_quads) return false;
   for (uint32_t i = t.vertex_offsets[v]; i < t.vertex_offsets[v + 1]; ++i) {
@@ -466,16 +471,7 @@ int Builder::single_crease(Level& L, const RefinedLevel& R, uint32_t f, float& s
 // rule), with nothing semi-sharp.
 bool Builder::regular_vertex_inf(Level& L, const RefinedLevel& R, uint32_t v) const {
   const Topo& t = L.topo;
-  // The common case first, as in regular_vertex: four plain interior faces.
-  if (R.vertex_sharpness[v] == 0.0f && t.vertex_offsets[v + 1] - t.vertex_offsets[v] == 4 &&
-      R.face_offsets.size() == 4 * R.face_count() + 1) {
-    bool plain = true;
-    for (uint32_t i = t.vertex_offsets[v]; i < t.vertex_offsets[v + 1] && plain; ++i) {
-      const uint32_t c = t.vertex_corners[i], tw = t.corner_twin[c];
-      plain = tw < kNonManifold && R.face_vertices[tw] != v && L.corner_sharpness[c] == 0.0f;
-    }
-    if (plain) return true;
-  }
+  if (plain_interior(L, R, v)) return true;
   const RingView g = ring(L, R, v);
   if (!g.manifold || !g.all_quads) return false;
   const SharpEdges e = sharp_edges(L, v);
