@@ -14,6 +14,7 @@
 #include "limn/mesh/topology.hpp"
 #include "limn/subdiv/patches.hpp"
 #include "limn/subdiv/refine.hpp"
+#include "limn/subdiv/tessellate.hpp"
 
 namespace limn {
 namespace {
@@ -349,6 +350,51 @@ TEST_F(Cli, SubdivideAdaptiveRejectsBadOptions) {
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << bad << ": " << r.err;
   }
   EXPECT_FALSE(fs::exists(dir_ / "x.ply"));
+}
+
+// The "done when": BigGuy's adaptive surface with depth colours is deeper near the
+// camera (levels read back from the colours).
+TEST_F(Cli, SubdivideAdaptiveDepthColoursAreDeeperNearTheCamera) {
+  const fs::path big = fs::path(LIMN_SHARED_MODELS) / "quads/bigguy.obj";
+  if (!fs::exists(big)) GTEST_SKIP() << "no shared models";
+  const Mesh cage = read_mesh(big);
+  const Box b = bounding_box(cage);
+  // Looking along -z at the model's +x half from close by.
+  const float cx = b.max[0], cy = 0.5f * (b.min[1] + b.max[1]), cz = 0.5f * (b.min[2] + b.max[2]);
+  const float d = b.diagonal();
+  const std::string camera = std::to_string(cx) + "," + std::to_string(cy) + "," +
+                             std::to_string(cz + 0.6f * d) + "," + std::to_string(cx - 0.5f * d) +
+                             "," + std::to_string(cy) + "," + std::to_string(cz) + ",50";
+  const fs::path out = dir_ / "bigguy.ply";
+  const Result r = limn("subdivide " + q(big) + " -o " + q(out) +
+                        " --adaptive --tolerance 0.5 --tess 2 --depth-colors --camera " + camera);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const Mesh m = read_mesh(out);
+  ASSERT_EQ(m.colors.size(), 4 * m.vertex_count());
+  const float eye[3] = {cx, cy, cz + 0.6f * d};
+  std::vector<std::pair<float, int>> by_distance;
+  for (size_t v = 0; v < m.vertex_count(); ++v) {
+    int level = -1;
+    for (int l = 0; l < 8 && level < 0; ++l) {
+      float rgb[3];
+      depth_color(l, rgb);
+      if (std::abs(rgb[0] - m.colors[4 * v]) < 0.01f &&
+          std::abs(rgb[1] - m.colors[4 * v + 1]) < 0.01f &&
+          std::abs(rgb[2] - m.colors[4 * v + 2]) < 0.01f)
+        level = l;
+    }
+    ASSERT_GE(level, 0) << "vertex " << v << " has no depth colour";
+    const float dx = m.positions[3 * v] - eye[0], dy = m.positions[3 * v + 1] - eye[1],
+                dz = m.positions[3 * v + 2] - eye[2];
+    by_distance.emplace_back(std::sqrt(dx * dx + dy * dy + dz * dz), level);
+  }
+  std::sort(by_distance.begin(), by_distance.end());
+  const size_t q4 = by_distance.size() / 4;
+  double near = 0, far = 0;
+  for (size_t i = 0; i < q4; ++i) near += by_distance[i].second;
+  for (size_t i = by_distance.size() - q4; i < by_distance.size(); ++i)
+    far += by_distance[i].second;
+  EXPECT_GT(near / double(q4), far / double(q4) + 0.25);
 }
 
 }  // namespace
