@@ -10,7 +10,9 @@
 #include "deep_reference.hpp"
 #include "limn/mesh/io.hpp"
 #include "limn/mesh/shapes.hpp"
+#include "limn/mesh/topology.hpp"
 #include "limn/subdiv/patches.hpp"
+#include "limn/subdiv/tessellate.hpp"
 #include "osd_oracle.hpp"
 #include "random_cage.hpp"
 
@@ -461,6 +463,13 @@ TEST(Patches, HierarchySelectionEqualsADirectBuild) {
             worst = std::max(worst, double(std::hypot(x[0] - y[0], x[1] - y[1], x[2] - y[2])));
           }
       EXPECT_LT(worst, 1e-6 * bounding_box(cage).diagonal()) << ci;
+      // A selection tessellates like any table, with the hierarchy's points.
+      const Mesh tess = tessellate_patches(cage, sel, hp, TessellateOptions{});
+      const MeshStats st = analyze(tess, build_topology(tess));
+      EXPECT_EQ(st.non_manifold_edges, 0u) << ci;
+      if (ci == 0 || ci == 2) {  // the closed ones: torus, cube
+        EXPECT_EQ(st.boundary_edges, 0u) << ci;
+      }
     }
     EXPECT_THROW((void)select_patches(h, {}), InputError);
     EXPECT_THROW(
