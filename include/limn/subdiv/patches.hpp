@@ -47,6 +47,7 @@ struct PatchParam {
   uint8_t reserved = 0;
   float sharpness = 0;  ///< single_crease: the crease's sharpness at the patch's level
 };
+static_assert(sizeof(PatchParam) == 24, "PatchParam is uploaded to GPUs as is");
 
 struct PatchOptions {
   SubdivOptions subdiv;
