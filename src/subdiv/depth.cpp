@@ -54,27 +54,40 @@ void catmark_eigenvalues(int n, double& lambda, double& mu) {
     }
 }
 
+namespace {
+
+// The view axis (unit), the eye-target distance and the focal length in pixels.
+struct ViewAxis {
+  double f[3] = {}, distance = 0, f_px = 0;
+};
+
+ViewAxis view_axis(const Camera& c) {
+  ViewAxis a;
+  for (int k = 0; k < 3; ++k) a.f[k] = double(c.target[k]) - c.eye[k];
+  a.distance = std::sqrt(dot3(a.f, a.f));
+  if (a.distance > 0)
+    for (double& x : a.f) x /= a.distance;
+  a.f_px = c.height / (2.0 * std::tan(0.5 * double(c.fovy_deg) * std::numbers::pi / 180.0));
+  return a;
+}
+
+}  // namespace
+
 double Camera::scale_at(const float p[3], double radius) const {
-  double f[3] = {double(target[0]) - eye[0], double(target[1]) - eye[1],
-                 double(target[2]) - eye[2]};
-  const double len = std::sqrt(dot3(f, f));
-  if (!(len > 0)) return 0.0;
-  for (double& x : f) x /= len;
+  const ViewAxis a = view_axis(*this);
+  if (!(a.distance > 0)) return 0.0;
   const double d[3] = {double(p[0]) - eye[0], double(p[1]) - eye[1], double(p[2]) - eye[2]};
-  const double z = std::max(dot3(d, f) - radius, 1e-6 * len);
-  const double f_px = height / (2.0 * std::tan(0.5 * double(fovy_deg) * std::numbers::pi / 180.0));
-  return f_px / z;
+  const double z = std::max(dot3(d, a.f) - radius, 1e-6 * a.distance);
+  return a.f_px / z;
 }
 
 bool Camera::project(const float p[3], double& x, double& y) const {
-  double f[3] = {double(target[0]) - eye[0], double(target[1]) - eye[1],
-                 double(target[2]) - eye[2]};
-  double l = std::sqrt(dot3(f, f));
-  for (double& c : f) c /= l;
+  const ViewAxis a = view_axis(*this);
+  const double* f = a.f;
   // right = f x up, true up = right x f
   double r[3] = {f[1] * up[2] - f[2] * up[1], f[2] * up[0] - f[0] * up[2],
                  f[0] * up[1] - f[1] * up[0]};
-  l = std::sqrt(dot3(r, r));
+  const double l = std::sqrt(dot3(r, r));
   if (!(l > 0)) return false;
   for (double& c : r) c /= l;
   const double u[3] = {r[1] * f[2] - r[2] * f[1], r[2] * f[0] - r[0] * f[2],
@@ -82,9 +95,8 @@ bool Camera::project(const float p[3], double& x, double& y) const {
   const double d[3] = {double(p[0]) - eye[0], double(p[1]) - eye[1], double(p[2]) - eye[2]};
   const double z = dot3(d, f);
   if (z <= 0) return false;
-  const double f_px = height / (2.0 * std::tan(0.5 * double(fovy_deg) * std::numbers::pi / 180.0));
-  x = 0.5 * width + f_px * dot3(d, r) / z;
-  y = 0.5 * height - f_px * dot3(d, u) / z;
+  x = 0.5 * width + a.f_px * dot3(d, r) / z;
+  y = 0.5 * height - a.f_px * dot3(d, u) / z;
   return true;
 }
 

@@ -15,17 +15,19 @@ namespace {
 
 constexpr uint32_t kPatchBit = 0x80000000u;
 
-// Uniform cubic B-spline basis and its derivative at t.
-void bspline(double t, double w[4], double d[4]) {
-  const double s = 1.0 - t, t2 = t * t, t3 = t2 * t;
-  w[0] = s * s * s / 6.0;
-  w[1] = (3.0 * t3 - 6.0 * t2 + 4.0) / 6.0;
-  w[2] = (-3.0 * t3 + 3.0 * t2 + 3.0 * t + 1.0) / 6.0;
-  w[3] = t3 / 6.0;
-  d[0] = -0.5 * s * s;
-  d[1] = 1.5 * t2 - 2.0 * t;
-  d[2] = -1.5 * t2 + t + 0.5;
-  d[3] = 0.5 * t2;
+// Uniform cubic B-spline basis and its derivative at t (double for the general path, float
+// for the plain-patch fast path).
+template <class T>
+void bspline(T t, T w[4], T d[4]) {
+  const T s = T(1) - t, t2 = t * t, t3 = t2 * t;
+  w[0] = s * s * s / T(6);
+  w[1] = (T(3) * t3 - T(6) * t2 + T(4)) / T(6);
+  w[2] = (T(-3) * t3 + T(3) * t2 + T(3) * t + T(1)) / T(6);
+  w[3] = t3 / T(6);
+  d[0] = T(-0.5) * s * s;
+  d[1] = T(1.5) * t2 - T(2) * t;
+  d[2] = T(-1.5) * t2 + t + T(0.5);
+  d[3] = T(0.5) * t2;
 }
 
 // Folds an extrapolated end point (2 * next - next-but-one) into the other weights.
@@ -164,17 +166,12 @@ void eval_gregory(const uint32_t* cv, double s, double t, const float* pts, Eval
   }
 }
 
-// The common case, a regular patch away from boundaries and creases, all in float: the basis
-// in closed form, rows accumulated, the derivatives scaled to ptex units.
+// The common case, a regular patch away from boundaries and creases, all in float: rows
+// accumulated, the derivatives scaled to ptex units.
 inline void eval_plain(const uint32_t* cv, float s, float t, float scale, const float* pts,
                        float* p_out, float* du_out, float* dv_out) {
-  const float su = 1.0f - s, tv = 1.0f - t, s2 = s * s, t2 = t * t;
-  const float wu[4] = {su * su * su / 6.0f, (3.0f * s2 * s - 6.0f * s2 + 4.0f) / 6.0f,
-                       (-3.0f * s2 * s + 3.0f * s2 + 3.0f * s + 1.0f) / 6.0f, s2 * s / 6.0f};
-  const float du[4] = {-0.5f * su * su, 1.5f * s2 - 2.0f * s, -1.5f * s2 + s + 0.5f, 0.5f * s2};
-  const float wv[4] = {tv * tv * tv / 6.0f, (3.0f * t2 * t - 6.0f * t2 + 4.0f) / 6.0f,
-                       (-3.0f * t2 * t + 3.0f * t2 + 3.0f * t + 1.0f) / 6.0f, t2 * t / 6.0f};
-  const float dv[4] = {-0.5f * tv * tv, 1.5f * t2 - 2.0f * t, -1.5f * t2 + t + 0.5f, 0.5f * t2};
+  float wu[4], du[4], wv[4], dv[4];
+  bspline(s, wu, du), bspline(t, wv, dv);
   float p[3] = {}, pu[3] = {}, pv[3] = {};
   for (int y = 0; y < 4; ++y) {
     float rp[3] = {}, ru[3] = {};

@@ -124,6 +124,20 @@ struct Level {
   mutable std::vector<uint8_t> cuts;  // cuts_at_inf_sharp per vertex: 0 unknown, 1 no, 2 yes
 };
 
+// Appends to a CSR of vertex sets (values, offsets) the sorted union of `from`'s sets of the
+// given vertices: the cage vertices a new point's, or a face's, depth comes from.
+template <class Vertices>
+void append_union(std::vector<uint32_t>& values, std::vector<uint32_t>& offsets, const Level& from,
+                  const Vertices& vertices) {
+  const auto start = long(values.size());
+  for (const uint32_t x : vertices)
+    values.insert(values.end(), from.src.begin() + from.src_offsets[x],
+                  from.src.begin() + from.src_offsets[x + 1]);
+  std::sort(values.begin() + start, values.end());
+  values.erase(std::unique(values.begin() + start, values.end()), values.end());
+  offsets.push_back(uint32_t(values.size()));
+}
+
 // A cached ring.
 struct RingView {
   const uint32_t *edge_end = nullptr, *diagonal = nullptr, *face = nullptr;
@@ -611,35 +625,19 @@ void Builder::request(size_t k, const SparseLevel& S, const LevelAdjacency& adj,
   L.level = &R;
   if (h_) {  // where each vertex's depth comes from: itself, or what it was made from
     L.src_offsets.assign(1, 0);
-    auto append = [&](std::initializer_list<uint32_t> from, const Level* P) {
-      const size_t start = L.src.size();
-      for (uint32_t x : from)
-        L.src.insert(L.src.end(), P->src.begin() + P->src_offsets[x],
-                     P->src.begin() + P->src_offsets[x + 1]);
-      std::sort(L.src.begin() + long(start), L.src.end());
-      L.src.erase(std::unique(L.src.begin() + long(start), L.src.end()), L.src.end());
-      L.src_offsets.push_back(uint32_t(L.src.size()));
-    };
     if (k == 0) {
       for (uint32_t v = 0; v < nv; ++v) L.src.push_back(v), L.src_offsets.push_back(v + 1);
     } else {
       const Level& P = levels_[k - 1];
-      std::vector<uint32_t> corners;
-      for (uint32_t f : S.parent_faces) {
-        const size_t start = L.src.size();
-        for (uint32_t c = P.level->face_offsets[f]; c < P.level->face_offsets[f + 1]; ++c) {
-          const uint32_t x = P.level->face_vertices[c];
-          L.src.insert(L.src.end(), P.src.begin() + P.src_offsets[x],
-                       P.src.begin() + P.src_offsets[x + 1]);
-        }
-        std::sort(L.src.begin() + long(start), L.src.end());
-        L.src.erase(std::unique(L.src.begin() + long(start), L.src.end()), L.src.end());
-        L.src_offsets.push_back(uint32_t(L.src.size()));
-      }
+      const RefinedLevel& PR = *P.level;
+      for (uint32_t f : S.parent_faces)
+        append_union(L.src, L.src_offsets, P,
+                     std::span(PR.face_vertices.data() + PR.face_offsets[f],
+                               PR.face_offsets[f + 1] - PR.face_offsets[f]));
       for (uint32_t e : S.parent_edges)
-        append({P.level->edge_vertices[2 * size_t(e)], P.level->edge_vertices[2 * size_t(e) + 1]},
-               &P);
-      for (uint32_t v : S.parent_vertices) append({v}, &P);
+        append_union(L.src, L.src_offsets, P,
+                     std::span(PR.edge_vertices.data() + 2 * size_t(e), 2));
+      for (uint32_t v : S.parent_vertices) append_union(L.src, L.src_offsets, P, std::span(&v, 1));
     }
   }
   emit(k, S);
@@ -848,18 +846,12 @@ void Builder::emit(size_t k, const SparseLevel& S) {
         h_->node_first_child.push_back(kNone);
         h_->node_children.push_back(0);
         h_->node_neighbours.insert(h_->node_neighbours.end(), {kNone, kNone, kNone, kNone});
-        // Depth sources of the irregular corners.
-        const size_t start = h_->node_src.size();
-        for (uint32_t c = R.face_offsets[f]; c < R.face_offsets[f + 1]; ++c) {
-          const uint32_t v = R.face_vertices[c];
-          if (L.irregular[v] && L.crease_edge[f] < 0)
-            h_->node_src.insert(h_->node_src.end(), L.src.begin() + L.src_offsets[v],
-                                L.src.begin() + L.src_offsets[v + 1]);
-        }
-        std::sort(h_->node_src.begin() + long(start), h_->node_src.end());
-        h_->node_src.erase(std::unique(h_->node_src.begin() + long(start), h_->node_src.end()),
-                           h_->node_src.end());
-        h_->node_src_offsets.push_back(uint32_t(h_->node_src.size()));
+        // Depth sources of the irregular corners (none for a single-crease face).
+        std::vector<uint32_t> irregular;
+        for (uint32_t c = R.face_offsets[f]; c < R.face_offsets[f + 1]; ++c)
+          if (L.irregular[R.face_vertices[c]] && L.crease_edge[f] < 0)
+            irregular.push_back(R.face_vertices[c]);
+        append_union(h_->node_src, h_->node_src_offsets, L, irregular);
         if (k == 0) {
           h_->roots.push_back(n);
         } else {
