@@ -133,14 +133,19 @@ Key Tessellator::point(uint32_t p, int64_t i, int64_t j) const {
   return boundary_point(l.key, l.q0);
 }
 
+// Ptex grid coordinates (resolution R) of the corner where a patch's edge e starts.
+void edge_start(const PatchParam& pp, int e, int64_t R, int64_t& i, int64_t& j) {
+  const int64_t size = R >> pp.depth;
+  i = pp.u * size + (e == 1 || e == 2 ? size : 0);
+  j = pp.v * size + (e >= 2 ? size : 0);
+}
+
 // The line under edge e of a patch, with the parameter at the edge's start and its step per
 // ptex grid unit; `length` gets the edge's length in grid units.
 Tessellator::Line Tessellator::patch_edge(const PatchParam& pp, int e, int64_t& length) const {
-  const int64_t size = R_ >> pp.depth, u0 = pp.u * size, v0 = pp.v * size;
-  length = size;
-  // Start corner of edge e and its direction.
-  const int64_t ci[4] = {u0, u0 + size, u0 + size, u0}, cj[4] = {v0, v0, v0 + size, v0 + size};
-  const int64_t i = ci[e], j = cj[e];
+  length = R_ >> pp.depth;
+  int64_t i, j;
+  edge_start(pp, e, R_, i, j);
   switch (e) {
     case 0:
       if (j > 0) return {make(kRow, uint64_t(pp.ptex) << 24 | uint64_t(j), 0), i, 1};
@@ -232,7 +237,6 @@ Mesh Tessellator::run() {
   static constexpr float kCs[4] = {0, 1, 1, 0}, kCt[4] = {0, 0, 1, 1};
   for (uint32_t i = 0; i < np; ++i) {
     const PatchParam& pp = param(i);
-    const int64_t size = R_ >> pp.depth, u0 = pp.u * size, v0 = pp.v * size;
     for (int e = 0; e < 4; ++e) {
       int64_t len;
       const Line l = patch_edge(pp, e, len);
@@ -249,10 +253,10 @@ Mesh Tessellator::run() {
         Key k;
         if (type == kRow || type == kCol) {
           const int64_t along = (*it - l.q0) * l.dq;  // grid units from the start corner
-          const int64_t ci[4] = {u0, u0 + size, u0 + size, u0};
-          const int64_t cj[4] = {v0, v0, v0 + size, v0 + size};
-          const int64_t di[4] = {1, 0, -1, 0}, dj[4] = {0, 1, 0, -1};
-          k = point(pp.ptex, ci[e] + di[e] * along, cj[e] + dj[e] * along);
+          int64_t i0, j0;
+          edge_start(pp, e, R_, i0, j0);
+          static constexpr int64_t kDi[4] = {1, 0, -1, 0}, kDj[4] = {0, 1, 0, -1};
+          k = point(pp.ptex, i0 + kDi[e] * along, j0 + kDj[e] * along);
         } else {
           k = boundary_point(l.key, *it);
         }
