@@ -4,7 +4,10 @@
 // 2, 3, 4, 6 on the FAS cages, the car and pole360. Single thread; medians of `--repeat` runs (one
 // run where OpenSubdiv takes over 5 s). --special: both sides with single-crease and infinitely
 // sharp patches (OpenSubdiv's useSingleCreasePatch / useInfSharpPatch; limn's defaults).
-//   limn_bench_patches [--repeat N] [--models DIR] [--depths 2,3,4,6] [--special]
+// --mesh PATH (repeatable) replaces the shared cages, e.g. `limn shape torus-dense` (the 800k-quad
+// cage); --limn-only skips OpenSubdiv.
+//   limn_bench_patches [--repeat N] [--models DIR] [--depths 2,3,4,6] [--special] [--mesh PATH]
+//                      [--limn-only]
 #include <fmt/format.h>
 #include <tbb/global_control.h>
 
@@ -68,11 +71,17 @@ int main(int argc, char** argv) {
   bool special = false;
   fs::path models = LIMN_SHARED_MODELS;
   std::vector<int> depths = {2, 3, 4, 6};
+  std::vector<fs::path> paths;
+  bool limn_only = false;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--repeat") && i + 1 < argc)
       repeat = std::max(1, std::atoi(argv[++i]));
     else if (!std::strcmp(argv[i], "--models") && i + 1 < argc)
       models = argv[++i];
+    else if (!std::strcmp(argv[i], "--mesh") && i + 1 < argc)
+      paths.emplace_back(argv[++i]);
+    else if (!std::strcmp(argv[i], "--limn-only"))
+      limn_only = true;
     else if (!std::strcmp(argv[i], "--special"))
       special = true;
     else if (!std::strcmp(argv[i], "--depths") && i + 1 < argc) {
@@ -89,10 +98,11 @@ int main(int argc, char** argv) {
                          "osd/catmark_pole360.obj"};
   fmt::print("{:<22} {:>5} {:>10} {:>10} {:>10} {:>10} {:>8}\n", "model", "depth", "limn_patch",
              "osd_patch", "limn_ms", "osd_ms", "osd/limn");
-  for (const char* name : names) {
-    const fs::path path = models / name;
+  if (paths.empty())
+    for (const char* name : names) paths.push_back(models / name);
+  for (const fs::path& path : paths) {
     if (!fs::exists(path)) {
-      fmt::print("{:<22} missing\n", name);
+      fmt::print("{:<22} missing\n", path.string());
       continue;
     }
     const limn::Mesh m = limn::read_mesh(path);
@@ -108,12 +118,13 @@ int main(int argc, char** argv) {
         const limn::PatchTable t = limn::build_patches(m, opt);
         tl.push_back(now_ms() - t0);
         pl = t.patch_count();
+        if (limn_only) continue;
         const OsdResult o = osd_build(m, depth, special);
         to.push_back(o.ms);
         po = o.patches;
         if (o.ms > 5000) break;  // OpenSubdiv's high-valence pathology: one run says enough
       }
-      const double ml = median(tl), mo = median(to);
+      const double ml = median(tl), mo = to.empty() ? 0.0 : median(to);
       fmt::print("{:<22} {:>5} {:>10} {:>10} {:>10.2f} {:>10.2f} {:>7.2f}x\n",
                  path.filename().string(), depth, pl, po, ml, mo, mo / ml);
       std::fflush(stdout);

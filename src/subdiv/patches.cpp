@@ -61,21 +61,47 @@ struct Ring {
 // The corner table the builder walks, made from refine_sparse's own adjacency (no second
 // adjacency build): next/prev in the face, the opposite corner (kNone on a boundary,
 // kNonManifold on an edge of more than two faces), and each vertex's corners.
+// Every level after the cage (and many cages) is all quads: corner c is then corner c % 4 of face
+// c / 4, and the per-corner face/next/prev arrays (a third of the walking data on the last,
+// largest level) are not stored.
+template <int kOp>  // 0: face, 1: next corner in the face, 2: previous
+struct CornerRel {
+  std::vector<uint32_t> table;  // empty when all faces are quads
+  uint32_t operator[](uint32_t c) const {
+    if (!table.empty()) return table[c];
+    if constexpr (kOp == 0) return c >> 2;
+    if constexpr (kOp == 1) return (c & ~3u) | ((c + 1) & 3u);
+    return (c & ~3u) | ((c + 3) & 3u);
+  }
+};
+
+// The sharpness of each corner's edge, read through the level's adjacency.
+struct CornerSharpness {
+  std::span<const uint32_t> corner_edge;
+  const float* edge_sharpness = nullptr;
+  float operator[](uint32_t c) const { return edge_sharpness[corner_edge[c]]; }
+};
+
 struct Topo {
-  std::vector<uint32_t> corner_face, corner_next, corner_prev, corner_twin;
-  std::vector<uint32_t> vertex_offsets, vertex_corners;
+  CornerRel<0> corner_face;
+  CornerRel<1> corner_next;
+  CornerRel<2> corner_prev;
+  std::vector<uint32_t> corner_twin;
+  std::span<const uint32_t> vertex_offsets, vertex_corners;  // refine_sparse's, during a request
 };
 
 Topo make_topo(const RefinedLevel& R, const LevelAdjacency& a) {
   Topo t;
   const size_t nc = R.face_vertices.size();
-  t.corner_face.resize(nc), t.corner_next.resize(nc), t.corner_prev.resize(nc);
-  for (uint32_t f = 0; f < R.face_count(); ++f) {
-    const uint32_t b = R.face_offsets[f], e = R.face_offsets[f + 1];
-    for (uint32_t c = b; c < e; ++c) {
-      t.corner_face[c] = f;
-      t.corner_next[c] = c + 1 == e ? b : c + 1;
-      t.corner_prev[c] = c == b ? e - 1 : c - 1;
+  if (nc != 4 * R.face_count()) {
+    t.corner_face.table.resize(nc), t.corner_next.table.resize(nc), t.corner_prev.table.resize(nc);
+    for (uint32_t f = 0; f < R.face_count(); ++f) {
+      const uint32_t b = R.face_offsets[f], e = R.face_offsets[f + 1];
+      for (uint32_t c = b; c < e; ++c) {
+        t.corner_face.table[c] = f;
+        t.corner_next.table[c] = c + 1 == e ? b : c + 1;
+        t.corner_prev.table[c] = c == b ? e - 1 : c - 1;
+      }
     }
   }
   t.corner_twin.assign(nc, kNone);
@@ -89,15 +115,15 @@ Topo make_topo(const RefinedLevel& R, const LevelAdjacency& a) {
       for (uint32_t i = lo; i < hi; ++i) t.corner_twin[a.edge_corners[i]] = kNonManifold;
     }
   }
-  t.vertex_offsets.assign(a.vertex_corner_offsets.begin(), a.vertex_corner_offsets.end());
-  t.vertex_corners.assign(a.vertex_corners.begin(), a.vertex_corners.end());
+  t.vertex_offsets = a.vertex_corner_offsets;
+  t.vertex_corners = a.vertex_corners;
   return t;
 }
 
 // Per-level state of the isolation.
 struct Level {
   Topo topo;
-  std::vector<float> corner_sharpness;     // sharpness of each corner's edge (by corner)
+  CornerSharpness corner_sharpness;        // sharpness of each corner's edge (by corner)
   std::vector<uint8_t> rem;                // per vertex: levels still wanted around it
   std::vector<uint8_t> irregular;          // per vertex (complete ones only)
   std::vector<uint8_t> owned;              // per face: this level covers it (or a deeper one)
@@ -226,6 +252,7 @@ class Builder {
   PatchStats* stats_ = nullptr;
   double emit_ms_ = 0;
   uint32_t level_start_ = 0;                          // global id of this level's first point
+  std::vector<uint32_t> level_points_;                // points of each level, as refined
   std::vector<std::vector<uint32_t>> node_of_level_;  // hierarchy: node of each level's faces
   GregoryCap cap_;                                    // reused: its buffers stay allocated
 };
@@ -516,9 +543,7 @@ void Builder::request(size_t k, const SparseLevel& S, const LevelAdjacency& adj,
   Level& L = levels_.emplace_back();
   L.topo = make_topo(R, adj);
   const Topo& t = L.topo;
-  L.corner_sharpness.resize(R.face_vertices.size());
-  for (size_t c = 0; c < R.face_vertices.size(); ++c)
-    L.corner_sharpness[c] = R.edge_sharpness[adj.corner_edge[c]];
+  L.corner_sharpness = {adj.corner_edge, R.edge_sharpness.data()};
 
   // Depth wanted around each vertex.
   L.rem.assign(nv, 0);
@@ -988,7 +1013,57 @@ void Builder::emit(size_t k, const SparseLevel& S) {
     }
   }
   level_start_ += uint32_t(S.level.vertex_count());
+  level_points_.push_back(uint32_t(S.level.vertex_count()));
   emit_ms_ += ms_since(t0);
+}
+
+// Drops the refined points no patch uses, directly or through a later level's stencils (the
+// sparse refinement makes whole rings around what it refines; on dense cages a third of its
+// points only support others' stencils one level down, or nothing). Cage points stay: they are
+// the input. Renumbers in place, keeping each level's order. O(stencil entries).
+void prune_points(PatchTable& t) {
+  const size_t nl = t.level_offsets.size() - 1;  // levels, the cage included
+  std::vector<uint8_t> need(t.level_offsets.back(), 0);
+  for (const uint32_t p : t.regular_points) need[p] = 1;
+  for (const uint32_t p : t.gregory_stencils.indices) need[p] = 1;
+  for (size_t k = nl - 1; k >= 1; --k) {
+    const StencilTable& s = t.level_stencils[k - 1];
+    const uint32_t base = t.level_offsets[k], prev = t.level_offsets[k - 1];
+    for (size_t i = 0; i < s.size(); ++i)
+      if (need[base + i])
+        for (uint32_t j = s.offsets[i]; j < s.offsets[i + 1]; ++j) need[prev + s.indices[j]] = 1;
+  }
+  // New global ids; the cage keeps its own.
+  std::vector<uint32_t> id(t.level_offsets.back(), kNone);
+  std::vector<uint32_t> offsets(nl + 1, 0);
+  for (uint32_t p = 0; p < t.level_offsets[1]; ++p) id[p] = p;
+  offsets[1] = t.level_offsets[1];
+  for (size_t k = 1; k < nl; ++k) {
+    StencilTable& s = t.level_stencils[k - 1];
+    const uint32_t base = t.level_offsets[k], prev = t.level_offsets[k - 1];
+    const size_t n = s.size();
+    uint32_t kept = 0, at = 0, begin = 0;
+    for (size_t i = 0; i < n; ++i) {
+      const uint32_t end = s.offsets[i + 1];  // read before the compaction writes over it
+      if (!need[base + i]) {
+        begin = end;
+        continue;
+      }
+      id[base + i] = offsets[k] + kept;
+      for (uint32_t j = begin; j < end; ++j, ++at) {
+        s.indices[at] = id[prev + s.indices[j]] - offsets[k - 1];
+        s.weights[at] = s.weights[j];
+      }
+      s.offsets[++kept] = at;
+      begin = end;
+    }
+    s.offsets.resize(kept + 1), s.indices.resize(at), s.weights.resize(at);
+    s.offsets.shrink_to_fit(), s.indices.shrink_to_fit(), s.weights.shrink_to_fit();
+    offsets[k + 1] = offsets[k] + kept;
+  }
+  for (uint32_t& p : t.regular_points) p = id[p];
+  for (uint32_t& p : t.gregory_stencils.indices) p = id[p];
+  t.level_offsets = std::move(offsets);
 }
 
 void Builder::build(PatchTable& out, SparseRefinement& r, PatchStats* stats) {
@@ -996,9 +1071,9 @@ void Builder::build(PatchTable& out, SparseRefinement& r, PatchStats* stats) {
   out = std::move(out_);
   out.options = o_.subdiv;
   out.level_offsets.assign(1, 0);
-  for (const SparseLevel& S : r.levels)
-    out.level_offsets.push_back(out.level_offsets.back() + uint32_t(S.level.vertex_count()));
+  for (const uint32_t n : level_points_) out.level_offsets.push_back(out.level_offsets.back() + n);
   out.level_stencils = std::move(r.stencils);
+  prune_points(out);
   out.ptex_count = ptex_count_;
   out.ptex_of_face.assign(1, 0);
   for (size_t f = 0; f < cage_.face_count(); ++f) {
@@ -1009,8 +1084,8 @@ void Builder::build(PatchTable& out, SparseRefinement& r, PatchStats* stats) {
   const uint32_t cap_base = out.level_offsets.back();
   for (uint32_t& p : out.gregory_points) p += cap_base;
   if (stats) {
-    stats->regular_by_level.resize(r.levels.size(), 0);
-    stats->gregory_by_level.resize(r.levels.size(), 0);
+    stats->regular_by_level.resize(level_points_.size(), 0);
+    stats->gregory_by_level.resize(level_points_.size(), 0);
     stats->points = out.point_count();
     stats->patches_ms = emit_ms_ + ms_since(t0);
   }
@@ -1039,9 +1114,12 @@ PatchHierarchy build_patch_hierarchy(const Mesh& cage, const PatchOptions& optio
     throw InputError(fmt::format("patches: depth {} out of range (0-12)", options.depth));
   PatchHierarchy h;
   Builder b(cage, options, {}, &h);
-  SparseRefinement r = refine_sparse(cage, options.subdiv,
-                                     [&](size_t k, const SparseLevel& S, const LevelAdjacency& a,
-                                         std::vector<uint8_t>& req) { b.request(k, S, a, req); });
+  SparseRefinement r = refine_sparse(
+      cage, options.subdiv,
+      [&](size_t k, const SparseLevel& S, const LevelAdjacency& a, std::vector<uint8_t>& req) {
+        b.request(k, S, a, req);
+      },
+      false);
   b.build(h.table, r, nullptr);
   return h;
 }
@@ -1113,9 +1191,12 @@ PatchTable build_patches(const Mesh& cage, const PatchOptions& options,
   if (stats) *stats = {};
   Builder b(cage, options, vertex_depth);
   b.set_stats(stats);
-  SparseRefinement r = refine_sparse(cage, options.subdiv,
-                                     [&](size_t k, const SparseLevel& S, const LevelAdjacency& a,
-                                         std::vector<uint8_t>& req) { b.request(k, S, a, req); });
+  SparseRefinement r = refine_sparse(
+      cage, options.subdiv,
+      [&](size_t k, const SparseLevel& S, const LevelAdjacency& a, std::vector<uint8_t>& req) {
+        b.request(k, S, a, req);
+      },
+      false);
   PatchTable out;
   b.build(out, r, stats);
   // Patches are emitted while the refinement runs: refine_ms is the rest.

@@ -1243,7 +1243,7 @@ namespace {
 constexpr int kMaxSparseDepth = 16;
 SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& options,
                                     const SparseRequest& request, std::vector<uint8_t> vertex_depth,
-                                    std::vector<uint8_t> face_depth);
+                                    std::vector<uint8_t> face_depth, bool keep_levels);
 }  // namespace
 
 SparseRefinement refine_sparse(const Mesh& cage, std::span<const uint8_t> vertex_depth,
@@ -1276,19 +1276,19 @@ SparseRefinement refine_sparse(const Mesh& cage, std::span<const uint8_t> vertex
       requested[f] = want;
     }
   };
-  return refine_sparse_impl(cage, options, request, std::move(vd), std::move(fd));
+  return refine_sparse_impl(cage, options, request, std::move(vd), std::move(fd), true);
 }
 
 SparseRefinement refine_sparse(const Mesh& cage, const SubdivOptions& options,
-                               const SparseRequest& request) {
+                               const SparseRequest& request, bool keep_levels) {
   return refine_sparse_impl(cage, options, request, std::vector<uint8_t>(cage.vertex_count(), 0),
-                            std::vector<uint8_t>(cage.face_count(), 0));
+                            std::vector<uint8_t>(cage.face_count(), 0), keep_levels);
 }
 
 namespace {
 SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& options,
                                     const SparseRequest& request, std::vector<uint8_t> vertex_depth,
-                                    std::vector<uint8_t> face_depth) {
+                                    std::vector<uint8_t> face_depth, bool keep_levels) {
   SparseRefinement r;
   r.options = options;
   r.levels.reserve(kMaxSparseDepth + 1);
@@ -1317,6 +1317,7 @@ SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& optio
     requested.assign(nf, 0);
     const LevelAdjacency view{t.corner_edge, t.eco, t.ec, t.vco, t.vc};
     request(k, P, view, requested);
+    if (!keep_levels && k > 0) r.levels[k - 1] = SparseLevel{};
     for (uint32_t f = 0; f < nf; ++f) {
       if (!requested[f]) continue;
       any = true;
@@ -1324,7 +1325,10 @@ SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& optio
         near[PL.face_vertices[c]] = 1;
     }
     P.face_refined.assign(nf, 0);
-    if (!any) break;
+    if (!any) {
+      if (!keep_levels) r.levels[k] = SparseLevel{};
+      break;
+    }
     if (k == kMaxSparseDepth)
       throw InputError(fmt::format("sparse refinement: requests beyond level {}", kMaxSparseDepth));
     for (uint32_t v = 0; v < nv; ++v)

@@ -171,8 +171,11 @@ using SparseRequest =
 
 /// Sparse refinement driven level by level (feature-adaptive isolation decides from each
 /// level's own topology and sharpness). SparseLevel::vertex_depth and face_depth stay 0.
+/// keep_levels = false: a caller that builds what it needs inside `request` (patch tables) gets
+/// only the stencils back; level k-1 is dropped once the request for level k has returned, so
+/// at most two levels' topology live at a time.
 SparseRefinement refine_sparse(const Mesh& cage, const SubdivOptions& options,
-                               const SparseRequest& request);
+                               const SparseRequest& request, bool keep_levels = true);
 
 /// Counts and timings of a lean uniform subdivision (subdivide_uniform).
 struct SubdivideStats {
