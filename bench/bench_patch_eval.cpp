@@ -1,5 +1,6 @@
 // Limit-surface evaluation throughput: points per second on a 9 x 9 grid of every face, limn
-// (PatchMap + evaluate_patches on its patch table, 1 and 2 threads) beside OpenSubdiv 3.5's two
+// (evaluate_grids on its patch table, 1 and 2 threads; and the lookup path, PatchMap +
+// evaluate_patches, 1 thread) beside OpenSubdiv 3.5's two
 // CPU paths in one run: Far (adaptive PatchTable with Gregory-basis end caps: PatchMap +
 // EvaluateBasis + the weighted sums) and Bfr (RefinerSurfaceFactory: one Surface per face,
 // PreparePatchPoints, Evaluate). Positions and first derivatives; each side's point preparation
@@ -52,8 +53,9 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--grid") && i + 1 < argc) grid = std::max(2, std::atoi(argv[++i]));
   const int depth = 3;
   const fs::path models = LIMN_SHARED_MODELS;
-  fmt::print("{:<16} {:>9} {:>10} {:>10} {:>10} {:>10} {:>9} {:>9} {:>9}\n", "model", "points",
-             "limn1t_ms", "limn2t_ms", "far_ms", "bfr_ms", "far/limn", "bfr/limn", "bfr/l2t");
+  fmt::print("{:<16} {:>9} {:>10} {:>10} {:>10} {:>10} {:>10} {:>9} {:>9} {:>9} {:>9}\n", "model",
+             "points", "limn1t_ms", "limn2t_ms", "lookup1t", "far_ms", "bfr_ms", "far/limn",
+             "bfr/limn", "bfr/l2t", "far/look");
   for (const char* name : {"quads/bigguy.obj", "quads/monsterfrog.obj"}) {
     const limn::Mesh cage = limn::read_mesh(models / name);
     std::vector<float> uv;
@@ -77,12 +79,18 @@ int main(int argc, char** argv) {
           coords[f * per + k] = map.find(uint32_t(f), uv[2 * k], uv[2 * k + 1]);
       limn::evaluate_patches(table, pts, coords, out.data(), du.data(), dv.data());
     };
-    double limn1, limn2;
+    // The same points, in the same order (face by face, row by row), without lookups.
+    auto limn_grid = [&] {
+      const std::vector<float> pts = table.points(cage.positions);
+      limn::evaluate_grids(table, pts, grid, out.data(), du.data(), dv.data());
+    };
+    double limn1, limn2, lookup1;
     {
       tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
-      limn1 = median_ms(limn_run);
+      limn1 = median_ms(limn_grid);
+      lookup1 = median_ms(limn_run);
     }
-    limn2 = median_ms(limn_run);
+    limn2 = median_ms(limn_grid);
 
     // Far.
     auto far_refiner = limn::bench::osd_refiner(cage);
@@ -143,9 +151,10 @@ int main(int argc, char** argv) {
       }
     });
     fmt::print(
-        "{:<16} {:>9} {:>10.2f} {:>10.2f} {:>10.2f} {:>10.2f} {:>8.2f}x {:>8.2f}x {:>8.2f}x\n",
-        fs::path(name).filename().string(), total, limn1, limn2, far_ms, bfr_ms, far_ms / limn1,
-        bfr_ms / limn1, bfr_ms / limn2);
+        "{:<16} {:>9} {:>10.2f} {:>10.2f} {:>10.2f} {:>10.2f} {:>10.2f} {:>8.2f}x {:>8.2f}x "
+        "{:>8.2f}x {:>8.2f}x\n",
+        fs::path(name).filename().string(), total, limn1, limn2, lookup1, far_ms, bfr_ms,
+        far_ms / limn1, bfr_ms / limn1, bfr_ms / limn2, far_ms / lookup1);
     std::fflush(stdout);
   }
 }

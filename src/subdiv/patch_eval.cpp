@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
+#include <immintrin.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -189,6 +191,119 @@ inline void eval_plain(const uint32_t* cv, float s, float t, float scale, const 
   }
 }
 
+// Up to 8 points of one regular (non-crease) patch at once, AVX2 lanes across the points: the
+// 16 control points read once per block, each basis weight a vector over the points. Boundary
+// folding is the same for every point, so it is done on the weight vectors.
+constexpr int kLanes = 8;
+
+// The cubic B-spline basis and its derivative, lane by lane.
+__attribute__((target("avx2,fma"), always_inline)) inline void basis_avx2(__m256 a, __m256 w[4],
+                                                                          __m256 d[4]) {
+  const __m256 one = _mm256_set1_ps(1), sixth = _mm256_set1_ps(1.0f / 6);
+  const __m256 three = _mm256_set1_ps(3);
+  const __m256 a1 = _mm256_sub_ps(one, a), a2 = _mm256_mul_ps(a, a), a3 = _mm256_mul_ps(a2, a);
+  w[0] = _mm256_mul_ps(_mm256_mul_ps(_mm256_mul_ps(a1, a1), a1), sixth);
+  // (3a^3 - 6a^2 + 4) / 6 and (-3a^3 + 3a^2 + 3a + 1) / 6
+  w[1] = _mm256_mul_ps(
+      _mm256_fmadd_ps(three, a3, _mm256_fmadd_ps(_mm256_set1_ps(-6), a2, _mm256_set1_ps(4))),
+      sixth);
+  w[2] = _mm256_mul_ps(_mm256_fmadd_ps(_mm256_set1_ps(-3), a3,
+                                       _mm256_fmadd_ps(three, a2, _mm256_fmadd_ps(three, a, one))),
+                       sixth);
+  w[3] = _mm256_mul_ps(a3, sixth);
+  d[0] = _mm256_mul_ps(_mm256_set1_ps(-0.5f), _mm256_mul_ps(a1, a1));
+  d[1] = _mm256_fmadd_ps(_mm256_set1_ps(1.5f), a2, _mm256_mul_ps(_mm256_set1_ps(-2), a));
+  d[2] = _mm256_fmadd_ps(_mm256_set1_ps(-1.5f), a2, _mm256_add_ps(a, _mm256_set1_ps(0.5f)));
+  d[3] = _mm256_mul_ps(_mm256_set1_ps(0.5f), a2);
+}
+
+// fold() on weight vectors.
+__attribute__((target("avx2,fma"), always_inline)) inline void fold_avx2(__m256 w[4], bool low,
+                                                                         bool high) {
+  const __m256 two = _mm256_set1_ps(2), zero = _mm256_setzero_ps();
+  if (low) w[1] = _mm256_fmadd_ps(two, w[0], w[1]), w[2] = _mm256_sub_ps(w[2], w[0]), w[0] = zero;
+  if (high) w[2] = _mm256_fmadd_ps(two, w[3], w[2]), w[1] = _mm256_sub_ps(w[1], w[3]), w[3] = zero;
+}
+
+// sv, tv: kLanes patch coordinates (lanes past n padded with any value in [0, 1]); lane l's
+// results go to point idx[l] of the outputs.
+__attribute__((target("avx2,fma"))) void block_regular_avx2(const uint32_t* cv, uint8_t boundary,
+                                                            const float* sv, const float* tv,
+                                                            const size_t* idx, int n, float scale,
+                                                            const float* pts, float* pos,
+                                                            float* du_out, float* dv_out) {
+  __m256 wu[4], du[4], wv[4], dv[4];
+  basis_avx2(_mm256_loadu_ps(sv), wu, du);
+  basis_avx2(_mm256_loadu_ps(tv), wv, dv);
+  if (boundary) {
+    fold_avx2(wu, boundary & 8, boundary & 2), fold_avx2(du, boundary & 8, boundary & 2);
+    fold_avx2(wv, boundary & 1, boundary & 4), fold_avx2(dv, boundary & 1, boundary & 4);
+  }
+  // Rows first (u), then across rows (v); the three coordinates side by side, so that nine
+  // independent accumulation chains hide the FMA latency. Control points are taken relative to
+  // the patch's corner point (the weights sum to 1, the derivative weights to 0), which keeps
+  // float sums from cancelling on tiny deep patches far from the origin.
+  const float* origin = pts + 3 * size_t(cv[5]);
+  const float o3[3] = {origin[0], origin[1], origin[2]};
+  __m256 p[3], pu[3], pv[3];
+  for (int c = 0; c < 3; ++c) p[c] = pu[c] = pv[c] = _mm256_setzero_ps();
+  for (int y = 0; y < 4; ++y) {
+    __m256 rp[3], ru[3];
+    for (int c = 0; c < 3; ++c) rp[c] = ru[c] = _mm256_setzero_ps();
+    for (int x = 0; x < 4; ++x) {
+      const float* q = pts + 3 * size_t(cv[4 * y + x]);
+      for (int c = 0; c < 3; ++c) {
+        const __m256 qc = _mm256_set1_ps(q[c] - o3[c]);
+        rp[c] = _mm256_fmadd_ps(wu[x], qc, rp[c]), ru[c] = _mm256_fmadd_ps(du[x], qc, ru[c]);
+      }
+    }
+    for (int c = 0; c < 3; ++c) {
+      p[c] = _mm256_fmadd_ps(wv[y], rp[c], p[c]);
+      pu[c] = _mm256_fmadd_ps(wv[y], ru[c], pu[c]);
+      pv[c] = _mm256_fmadd_ps(dv[y], rp[c], pv[c]);
+    }
+  }
+  alignas(32) float out[3][3][kLanes];  // position, du, dv; x y z; lanes
+  const __m256 sc = _mm256_set1_ps(scale);
+  for (int c = 0; c < 3; ++c) {
+    _mm256_store_ps(out[0][c], _mm256_add_ps(p[c], _mm256_set1_ps(o3[c])));
+    _mm256_store_ps(out[1][c], _mm256_mul_ps(pu[c], sc));
+    _mm256_store_ps(out[2][c], _mm256_mul_ps(pv[c], sc));
+  }
+  for (int l = 0; l < n; ++l) {
+    const size_t o = 3 * size_t(idx[l]);
+    for (int c = 0; c < 3; ++c) {
+      pos[o + c] = out[0][c][l];
+      if (du_out) du_out[o + c] = out[1][c][l];
+      if (dv_out) dv_out[o + c] = out[2][c][l];
+    }
+  }
+}
+
+// One point of any patch, the scalar way.
+void eval_point(const PatchTable& table, const float* pts, const PatchCoord& c, const PatchParam& p,
+                float* pos, float* du, float* dv) {
+  const size_t nr = table.regular_params.size();
+  if (c.patch < nr && p.boundary == 0 && p.type == PatchType::regular) {
+    eval_plain(&table.regular_points[16 * size_t(c.patch)], c.s, c.t, float(1u << p.depth), pts,
+               pos, du, dv);
+    return;
+  }
+  Eval e;
+  if (c.patch < nr)
+    eval_regular(&table.regular_points[16 * size_t(c.patch)], p, c.s, c.t, pts, e);
+  else
+    eval_gregory(&table.gregory_points[20 * (size_t(c.patch) - nr)], c.s, c.t, pts, e);
+  const double scale = double(1u << p.depth);
+  for (int k = 0; k < 3; ++k) {
+    pos[k] = float(e.p[k]);
+    if (du) du[k] = float(e.du[k] * scale);
+    if (dv) dv[k] = float(e.dv[k] * scale);
+  }
+}
+
+const bool kHaveAvx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+
 }  // namespace
 
 PatchMap::PatchMap(const PatchTable& table) : table_(&table) {
@@ -251,30 +366,106 @@ void evaluate_patches(const PatchTable& table, std::span<const float> points,
   if (points.size() < 3 * table.point_count())
     throw InputError("evaluate patches: fewer points than the patch table needs");
   const size_t nr = table.regular_params.size(), np = table.patch_count();
+  auto eval_one = [&](size_t i, const PatchCoord& c, const PatchParam& p) {
+    eval_point(table, points.data(), c, p, position + 3 * i, du ? du + 3 * i : nullptr,
+               dv ? dv + 3 * i : nullptr);
+  };
+  // Points of one plain or boundary regular patch go through the AVX2 block kernel 8 at a time:
+  // within each window of 64 points they are grouped by patch first (a grid over a face
+  // isolated around an extraordinary vertex meets each of its patches in short runs, row after
+  // row).
+  constexpr size_t kWindow = 64;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, coords.size(), 1024), [&](const auto& range) {
-    for (size_t i = range.begin(); i != range.end(); ++i) {
-      const PatchCoord& c = coords[i];
-      if (c.patch >= np) throw InputError("evaluate patches: patch index out of range");
+    uint32_t group_patch[kWindow], group_size[kWindow];
+    size_t members[kWindow][kWindow];
+    for (size_t w = range.begin(); w < range.end(); w += kWindow) {
+      const size_t we = std::min(range.end(), w + kWindow);
+      size_t groups = 0, last = 0;
+      for (size_t i = w; i < we; ++i) {
+        const PatchCoord& c = coords[i];
+        if (c.patch >= np) throw InputError("evaluate patches: patch index out of range");
+        const PatchParam& p =
+            c.patch < nr ? table.regular_params[c.patch] : table.gregory_params[c.patch - nr];
+        if (kHaveAvx2 && c.patch < nr && p.type == PatchType::regular) {
+          size_t g = last < groups && group_patch[last] == c.patch ? last : groups;
+          for (size_t k = 0; g == groups && k < groups; ++k)
+            if (group_patch[k] == c.patch) g = k;
+          if (g == groups) group_patch[groups] = c.patch, group_size[groups++] = 0;
+          members[g][group_size[g]++] = i;
+          last = g;
+          continue;
+        }
+        eval_one(i, c, p);
+      }
+      for (size_t g = 0; g < groups; ++g) {
+        const uint32_t patch = group_patch[g];
+        const PatchParam& p = table.regular_params[patch];
+        const uint32_t* cv = &table.regular_points[16 * size_t(patch)];
+        for (uint32_t k = 0; k < group_size[g]; k += kLanes) {
+          const int n = int(std::min<uint32_t>(kLanes, group_size[g] - k));
+          alignas(32) float sv[kLanes], tv[kLanes];
+          for (int l = 0; l < kLanes; ++l) {
+            const PatchCoord& c = coords[members[g][k + uint32_t(l < n ? l : n - 1)]];
+            sv[l] = c.s, tv[l] = c.t;
+          }
+          block_regular_avx2(cv, p.boundary, sv, tv, &members[g][k], n, float(1u << p.depth),
+                             points.data(), position, du, dv);
+        }
+      }
+    }
+  });
+}
+
+void evaluate_grids(const PatchTable& table, std::span<const float> points, int n, float* position,
+                    float* du, float* dv) {
+  if (n < 2 || n > 65536) throw InputError(fmt::format("evaluate grids: {} points per side", n));
+  if (points.size() < 3 * table.point_count())
+    throw InputError("evaluate grids: fewer points than the patch table needs");
+  if (table.ptex_count == 0) return;
+  const size_t nr = table.regular_params.size(), np = table.patch_count();
+  const uint64_t m = uint64_t(n) - 1, per = uint64_t(n) * uint64_t(n);
+  // Grid point i of a side lies at i / m; a patch at depth d, origin u0 holds the i with
+  // u0 <= i 2^d / m < u0 + 1 (the far side's last point too), which is PatchMap::find's rule.
+  auto range = [&](uint32_t o, uint32_t d, uint32_t& lo, uint32_t& hi) {
+    const uint64_t cells = uint64_t(1) << d;
+    lo = uint32_t((uint64_t(o) * m + cells - 1) >> d);  // ceil(o m / 2^d)
+    const uint64_t end = (uint64_t(o) + 1) * m;         // i 2^d < end, or the last point
+    hi = o + 1 == cells ? uint32_t(m) : uint32_t((end - 1) >> d);
+  };
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, np, 64), [&](const auto& r) {
+    alignas(32) float sv[kLanes], tv[kLanes];
+    size_t idx[kLanes];
+    for (size_t patch = r.begin(); patch != r.end(); ++patch) {
+      const bool regular = patch < nr;
       const PatchParam& p =
-          c.patch < nr ? table.regular_params[c.patch] : table.gregory_params[c.patch - nr];
-      if (c.patch < nr && p.boundary == 0 && p.type == PatchType::regular) {
-        eval_plain(&table.regular_points[16 * size_t(c.patch)], c.s, c.t, float(1u << p.depth),
-                   points.data(), position + 3 * i, du ? du + 3 * i : nullptr,
-                   dv ? dv + 3 * i : nullptr);
-        continue;
-      }
-      Eval e;
-      if (c.patch < nr)
-        eval_regular(&table.regular_points[16 * size_t(c.patch)], p, c.s, c.t, points.data(), e);
-      else
-        eval_gregory(&table.gregory_points[20 * (size_t(c.patch) - nr)], c.s, c.t, points.data(),
-                     e);
-      const double scale = double(1u << p.depth);
-      for (int k = 0; k < 3; ++k) {
-        position[3 * i + k] = float(e.p[k]);
-        if (du) du[3 * i + k] = float(e.du[k] * scale);
-        if (dv) dv[3 * i + k] = float(e.dv[k] * scale);
-      }
+          regular ? table.regular_params[patch] : table.gregory_params[patch - nr];
+      uint32_t i0, i1, j0, j1;
+      range(p.u, p.depth, i0, i1), range(p.v, p.depth, j0, j1);
+      const float cells = float(1u << p.depth), inv = 1.0f / float(m);
+      const bool block = kHaveAvx2 && regular && p.type == PatchType::regular;
+      const uint32_t* cv = regular ? &table.regular_points[16 * patch] : nullptr;
+      int lanes = 0;
+      auto flush = [&] {
+        if (lanes == 0) return;
+        for (int l = lanes; l < kLanes; ++l) sv[l] = sv[0], tv[l] = tv[0];
+        block_regular_avx2(cv, p.boundary, sv, tv, idx, lanes, cells, points.data(), position, du,
+                           dv);
+        lanes = 0;
+      };
+      for (uint32_t j = j0; j <= j1 && j0 <= j1; ++j)
+        for (uint32_t i = i0; i <= i1 && i0 <= i1; ++i) {
+          const float s = std::clamp(float(i) * inv * cells - float(p.u), 0.0f, 1.0f);
+          const float t = std::clamp(float(j) * inv * cells - float(p.v), 0.0f, 1.0f);
+          const size_t o = size_t(p.ptex) * per + size_t(j) * size_t(n) + i;
+          if (block) {
+            sv[lanes] = s, tv[lanes] = t, idx[lanes++] = o;
+            if (lanes == kLanes) flush();
+            continue;
+          }
+          eval_point(table, points.data(), PatchCoord{uint32_t(patch), s, t}, p, position + 3 * o,
+                     du ? du + 3 * o : nullptr, dv ? dv + 3 * o : nullptr);
+        }
+      flush();
     }
   });
 }

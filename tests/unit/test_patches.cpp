@@ -188,6 +188,80 @@ TEST(Patches, RandomCagesMatchOpenSubdiv) {
   }
 }
 
+// The grid evaluator (no lookups, 8 points at a time) gives what PatchMap::find and
+// evaluate_patches give at the same ptex coordinates: every patch type, boundaries, creases,
+// n-gons, per-vertex depths, grids that do and do not line up with patch edges.
+TEST(Patches, GridsEqualLookups) {
+  std::vector<Mesh> cages = {make_shape("torus"), make_shape("cage"), make_shape("cube")};
+  for (uint64_t seed : {3u, 5u, 11u}) cages.push_back(test::random_cage(seed));
+  int checked = 0;
+  for (size_t ci = 0; ci < cages.size(); ++ci) {
+    const Mesh& cage = cages[ci];
+    PatchOptions po;
+    po.subdiv = subdiv_options(cage);
+    po.depth = 3;
+    std::vector<uint8_t> depth(cage.vertex_count());
+    for (size_t v = 0; v < depth.size(); ++v) depth[v] = uint8_t((v * 7 + ci) % 4);
+    PatchTable table;
+    try {
+      table = build_patches(cage, po,
+                            ci % 2 ? std::span<const uint8_t>(depth) : std::span<const uint8_t>());
+    } catch (const InputError&) {
+      continue;  // a random cage limn rejects (checked elsewhere)
+    }
+    const std::vector<float> pts = table.points(cage.positions);
+    const PatchMap map(table);
+    const double diag = bbox_diagonal(cage);
+    for (int n : {2, 7, 9}) {
+      const size_t per = size_t(n) * size_t(n), total = table.ptex_count * per;
+      std::vector<float> gp(3 * total, NAN), gu(3 * total, NAN), gv(3 * total, NAN);
+      evaluate_grids(table, pts, n, gp.data(), gu.data(), gv.data());
+      // Hole faces have no patches: their grid points stay as they were.
+      std::vector<uint8_t> covered(table.ptex_count, 0);
+      for (const auto* params : {&table.regular_params, &table.gregory_params})
+        for (const PatchParam& p : *params) covered[p.ptex] = 1;
+      std::vector<PatchCoord> coords(total);
+      for (size_t i = 0; i < total; ++i) {
+        const size_t f = i / per, k = i % per;
+        if (covered[f])
+          coords[i] = map.find(uint32_t(f), double(k % size_t(n)) / (n - 1),
+                               double(k / size_t(n)) / (n - 1));
+      }
+      std::vector<float> lp(3 * total), lu(3 * total), lv(3 * total);
+      evaluate_patches(table, pts, coords, lp.data(), lu.data(), lv.data());
+      double worst_p = 0, worst_d = 0;
+      size_t worst_at = 0;
+      for (size_t i = 0; i < 3 * total; ++i) {
+        if (!covered[i / 3 / per]) {
+          ASSERT_TRUE(std::isnan(gp[i])) << "a hole face's grid was written";
+          continue;
+        }
+        ASSERT_TRUE(std::isfinite(gp[i]) && std::isfinite(gu[i]) && std::isfinite(gv[i]))
+            << "cage " << ci << " n " << n << " point " << i / 3 << " not written";
+        worst_p = std::max(worst_p, std::abs(double(gp[i]) - lp[i]) / diag);
+        // Derivatives relative to the point's largest derivative component.
+        const size_t q = i - i % 3;
+        double len = 1e-3 * diag;
+        for (size_t k = q; k < q + 3; ++k)
+          len = std::max({len, std::abs(double(lu[k])), std::abs(double(lv[k]))});
+        const double d = std::max(std::abs(double(gu[i]) - lu[i]), std::abs(double(gv[i]) - lv[i]));
+        if (d / len > worst_d) worst_d = d / len, worst_at = i / 3;
+      }
+      const PatchCoord& w = coords[worst_at];
+      EXPECT_LT(worst_p, 1e-6) << "cage " << ci << " n " << n;
+      EXPECT_LT(worst_d, 1e-4) << "cage " << ci << " n " << n << " point " << worst_at << " patch "
+                               << w.patch << " s " << w.s << " t " << w.t;
+      ++checked;
+    }
+  }
+  EXPECT_GE(checked, 12);
+  const Mesh cube = make_shape("cube");
+  const PatchTable t = build_patches(cube, PatchOptions{});
+  std::vector<float> out(3 * t.ptex_count * 4);
+  EXPECT_THROW(evaluate_grids(t, t.points(cube.positions), 1, out.data()), InputError);
+  EXPECT_THROW(evaluate_grids(t, std::vector<float>(3), 2, out.data()), InputError);
+}
+
 // End-cap derivatives are exact: central differences of positions agree.
 TEST(Patches, DerivativesMatchFiniteDifferences) {
   const Mesh cage = make_shape("cube");

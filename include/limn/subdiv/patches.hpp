@@ -160,4 +160,13 @@ void evaluate_patches(const PatchTable& table, std::span<const float> points,
                       std::span<const PatchCoord> coords, float* position, float* du = nullptr,
                       float* dv = nullptr);
 
+/// Uniform tessellation's evaluation: an n x n grid over every ptex face (point (i, j) at
+/// (i, j) / (n - 1)), written ptex face by face, row by row: point (f, i, j) is position[3 (f n^2
+/// + j n + i)], derivatives in ptex units like evaluate_patches. Each patch evaluates the grid
+/// points it holds (the rule of PatchMap::find), so no lookups; regular patches 8 points at once
+/// (AVX2 where the CPU has it). Outputs hold 3 ptex_count n^2 floats. 2 <= n <= 65536.
+/// O(ptex_count n^2), data-parallel over patches (TBB).
+void evaluate_grids(const PatchTable& table, std::span<const float> points, int n, float* position,
+                    float* du = nullptr, float* dv = nullptr);
+
 }  // namespace limn
