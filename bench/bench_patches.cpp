@@ -5,11 +5,14 @@
 // run where OpenSubdiv takes over 5 s). --special: both sides with single-crease and infinitely
 // sharp patches (OpenSubdiv's useSingleCreasePatch / useInfSharpPatch; limn's defaults).
 // --mesh PATH (repeatable) replaces the shared cages, e.g. `limn shape torus-dense` (the 800k-quad
-// cage); --limn-only skips OpenSubdiv.
+// cage); --limn-only skips OpenSubdiv; --peak prints the peak resident memory after each side
+// (one depth and --repeat 1 to read OpenSubdiv's).
 //   limn_bench_patches [--repeat N] [--models DIR] [--depths 2,3,4,6] [--special] [--mesh PATH]
-//                      [--limn-only]
+//                      [--limn-only] [--peak]
 #include <fmt/format.h>
 #include <tbb/global_control.h>
+
+#include <sys/resource.h>
 
 #include <algorithm>
 #include <chrono>
@@ -64,6 +67,14 @@ OsdResult osd_build(const limn::Mesh& m, int depth, bool special) {
   return out;
 }
 
+// The process's peak resident memory so far (limn runs first: a later, larger peak is
+// OpenSubdiv's).
+double peak_gb() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_maxrss) * 1024.0 / 1e9;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -72,7 +83,7 @@ int main(int argc, char** argv) {
   fs::path models = LIMN_SHARED_MODELS;
   std::vector<int> depths = {2, 3, 4, 6};
   std::vector<fs::path> paths;
-  bool limn_only = false;
+  bool limn_only = false, peak = false;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--repeat") && i + 1 < argc)
       repeat = std::max(1, std::atoi(argv[++i]));
@@ -82,6 +93,8 @@ int main(int argc, char** argv) {
       paths.emplace_back(argv[++i]);
     else if (!std::strcmp(argv[i], "--limn-only"))
       limn_only = true;
+    else if (!std::strcmp(argv[i], "--peak"))
+      peak = true;
     else if (!std::strcmp(argv[i], "--special"))
       special = true;
     else if (!std::strcmp(argv[i], "--depths") && i + 1 < argc) {
@@ -115,13 +128,17 @@ int main(int argc, char** argv) {
         opt.depth = depth;
         opt.inf_sharp_patches = opt.single_crease_patches = special;  // as the OpenSubdiv side
         const double t0 = now_ms();
-        const limn::PatchTable t = limn::build_patches(m, opt);
-        tl.push_back(now_ms() - t0);
-        pl = t.patch_count();
+        {
+          const limn::PatchTable t = limn::build_patches(m, opt);
+          tl.push_back(now_ms() - t0);
+          pl = t.patch_count();
+        }
+        if (peak) fmt::print("  peak RSS after limn: {:.2f} GB\n", peak_gb());
         if (limn_only) continue;
         const OsdResult o = osd_build(m, depth, special);
         to.push_back(o.ms);
         po = o.patches;
+        if (peak) fmt::print("  peak RSS after OpenSubdiv: {:.2f} GB\n", peak_gb());
         if (o.ms > 5000) break;  // OpenSubdiv's high-valence pathology: one run says enough
       }
       const double ml = median(tl), mo = to.empty() ? 0.0 : median(to);

@@ -66,7 +66,6 @@ class Tessellator {
   TessellateOptions o_;
   int64_t R_ = 0;
   std::vector<Face> ptex_;
-  std::unordered_map<Key, std::vector<int64_t>, KeyHash> lines_;
   std::unordered_map<Key, uint32_t, KeyHash> vertices_;
   std::vector<PatchCoord> coords_;  // one per output vertex
 };
@@ -215,19 +214,29 @@ Mesh Tessellator::run() {
       }
   }
 
-  // Pass 1: every patch edge's own samples on its line.
-  for (size_t i = 0; i < np; ++i)
-    for (int e = 0; e < 4; ++e) {
-      int64_t len;
-      const Line l = patch_edge(param(i), e, len);
-      std::vector<int64_t>& qs = lines_[l.key];
-      const int m = rate[i][size_t(e)];
-      for (int k = 0; k <= m; ++k) qs.push_back(l.q0 + l.dq * (len * k / m));
-    }
-  for (auto& [key, qs] : lines_) {
-    std::sort(qs.begin(), qs.end());
-    qs.erase(std::unique(qs.begin(), qs.end()), qs.end());
+  // Pass 1: every patch edge's own samples on its line, as (line, parameter) pairs in one flat
+  // array; sorted and deduplicated, each line's samples are one range of it.
+  std::vector<uint32_t> edge_line(4 * np);
+  std::vector<std::pair<uint32_t, int64_t>> samples;
+  {
+    std::unordered_map<Key, uint32_t, KeyHash> line_of;
+    line_of.reserve(3 * np);
+    for (size_t i = 0; i < np; ++i)
+      for (int e = 0; e < 4; ++e) {
+        int64_t len;
+        const Line l = patch_edge(param(i), e, len);
+        const uint32_t id = line_of.try_emplace(l.key, uint32_t(line_of.size())).first->second;
+        edge_line[4 * i + size_t(e)] = id;
+        const int m = rate[i][size_t(e)];
+        for (int k = 0; k <= m; ++k) samples.emplace_back(id, l.q0 + l.dq * (len * k / m));
+      }
+    std::sort(samples.begin(), samples.end());
+    samples.erase(std::unique(samples.begin(), samples.end()), samples.end());
   }
+  auto line_begin = [&](uint32_t id, int64_t q) {
+    return std::lower_bound(samples.begin(), samples.end(), std::make_pair(id, q));
+  };
+  vertices_.reserve(samples.size());
 
   // Pass 2: vertices and triangles per patch.
   Mesh out;
@@ -240,13 +249,13 @@ Mesh Tessellator::run() {
     for (int e = 0; e < 4; ++e) {
       int64_t len;
       const Line l = patch_edge(pp, e, len);
-      const std::vector<int64_t>& qs = lines_[l.key];
+      const uint32_t id = edge_line[4 * size_t(i) + size_t(e)];
       const int64_t qa = l.q0, qb = l.q0 + l.dq * len;
-      auto lo = std::lower_bound(qs.begin(), qs.end(), std::min(qa, qb));
-      auto hi = std::upper_bound(qs.begin(), qs.end(), std::max(qa, qb));
+      const auto lo = line_begin(id, std::min(qa, qb)), hi = line_begin(id, std::max(qa, qb) + 1);
       side[e].clear();
       const uint64_t type = l.key.hi >> 58;
-      for (auto it = lo; it != hi; ++it) {
+      for (auto s_it = lo; s_it != hi; ++s_it) {
+        const int64_t* it = &s_it->second;
         const double a = double(*it - qa) / double(qb - qa);  // 0 at the start corner
         const float s = float(kCs[e] + a * (kCs[(e + 1) % 4] - kCs[e]));
         const float t = float(kCt[e] + a * (kCt[(e + 1) % 4] - kCt[e]));
