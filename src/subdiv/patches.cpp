@@ -30,21 +30,27 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// A sparse linear combination of global points; merged per point when emitted.
+// A linear combination of an end cap's points: dense over the cap's support (the sorted ids of
+// its four corners and their rings), so adding terms is indexing, combining rows is a dense
+// axpy, and emitting walks the support in id order with no sorting.
 struct Terms {
-  std::vector<std::pair<uint32_t, double>> t;
-  void add(uint32_t p, double w) { t.emplace_back(p, w); }
-  void add(const Terms& o, double s) {
-    for (const auto& [p, w] : o.t) t.emplace_back(p, w * s);
+  const std::vector<uint32_t>* ids = nullptr;
+  std::vector<double> w;
+  void reset(const std::vector<uint32_t>& support) {
+    ids = &support;
+    w.assign(support.size(), 0.0);
   }
-  void emit(StencilTable& table) {
-    std::sort(t.begin(), t.end());
-    for (size_t i = 0; i < t.size();) {
-      const uint32_t p = t[i].first;
-      double w = 0;
-      for (; i < t.size() && t[i].first == p; ++i) w += t[i].second;
-      if (w != 0.0) table.indices.push_back(p), table.weights.push_back(float(w));
-    }
+  void add(uint32_t p, double x) {
+    const auto it = std::lower_bound(ids->begin(), ids->end(), p);
+    if (it == ids->end() || *it != p) throw std::logic_error("patches: end-cap point off support");
+    w[size_t(it - ids->begin())] += x;
+  }
+  void add(const Terms& o, double s) {
+    for (size_t i = 0; i < w.size(); ++i) w[i] += o.w[i] * s;
+  }
+  void emit(StencilTable& table) const {
+    for (size_t i = 0; i < w.size(); ++i)
+      if (w[i] != 0.0) table.indices.push_back((*ids)[i]), table.weights.push_back(float(w[i]));
     table.offsets.push_back(uint32_t(table.indices.size()));
   }
 };
@@ -192,6 +198,7 @@ class GregoryCap {
 
   Corner c[4];
   Terms p[4], ep[4], em[4], fp[4], fm[4];
+  std::vector<uint32_t> support;  // sorted ids of the corners and their rings
 
   // Ready for another patch, keeping the buffers.
   void reset() {
@@ -200,7 +207,6 @@ class GregoryCap {
       ring.clear();
       c[i] = Corner{};
       c[i].ring = std::move(ring);
-      for (Terms* t : {&p[i], &ep[i], &em[i], &fp[i], &fm[i]}) t->t.clear();
     }
   }
   void finish_topology();
@@ -679,6 +685,15 @@ void Builder::request(size_t k, const SparseLevel& S, const LevelAdjacency& adj,
 }
 
 void GregoryCap::finish_topology() {
+  support.clear();
+  for (const Corner& k : c) {
+    support.push_back(k.v);
+    support.insert(support.end(), k.ring.begin(), k.ring.end());
+  }
+  std::sort(support.begin(), support.end());
+  support.erase(std::unique(support.begin(), support.end()), support.end());
+  for (int i = 0; i < 4; ++i)
+    for (Terms* t : {&p[i], &ep[i], &em[i], &fp[i], &fm[i]}) t->reset(support);
   const double pi = std::numbers::pi;
   for (Corner& k : c) {
     k.valence = k.faces + (k.boundary ? 1 : 0);
