@@ -57,6 +57,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       }
       std::vector<float> pos(3 * coords.size()), du(pos.size()), dv(pos.size());
       limn::evaluate_patches(t, pts, coords, pos.data(), du.data(), dv.data());
+      // Grids: every covered ptex face's points written, and finite.
+      std::vector<float> grid(3 * size_t(t.ptex_count) * 9, 0.0f);
+      limn::evaluate_grids(t, pts, 3, grid.data());
+      for (float x : grid)
+        if (!std::isfinite(x)) __builtin_trap();
       limn::TessellateOptions to;
       to.factor = 2;
       const limn::Mesh tess = limn::tessellate_patches(m, t, pts, to);
