@@ -302,7 +302,14 @@ void eval_point(const PatchTable& table, const float* pts, const PatchCoord& c, 
   }
 }
 
-const bool kHaveAvx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+// Asked on first use, not in a static initialiser (which may run before libgcc's CPU probe).
+bool have_avx2() {
+  static const bool yes = [] {
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  }();
+  return yes;
+}
 
 }  // namespace
 
@@ -375,6 +382,7 @@ void evaluate_patches(const PatchTable& table, std::span<const float> points,
   // isolated around an extraordinary vertex meets each of its patches in short runs, row after
   // row).
   constexpr size_t kWindow = 64;
+  const bool avx2 = have_avx2();
   tbb::parallel_for(tbb::blocked_range<size_t>(0, coords.size(), 1024), [&](const auto& range) {
     uint32_t group_patch[kWindow], group_size[kWindow];
     size_t members[kWindow][kWindow];
@@ -386,7 +394,7 @@ void evaluate_patches(const PatchTable& table, std::span<const float> points,
         if (c.patch >= np) throw InputError("evaluate patches: patch index out of range");
         const PatchParam& p =
             c.patch < nr ? table.regular_params[c.patch] : table.gregory_params[c.patch - nr];
-        if (kHaveAvx2 && c.patch < nr && p.type == PatchType::regular) {
+        if (avx2 && c.patch < nr && p.type == PatchType::regular) {
           size_t g = last < groups && group_patch[last] == c.patch ? last : groups;
           for (size_t k = 0; g == groups && k < groups; ++k)
             if (group_patch[k] == c.patch) g = k;
@@ -432,6 +440,7 @@ void evaluate_grids(const PatchTable& table, std::span<const float> points, int 
     const uint64_t end = (uint64_t(o) + 1) * m;         // i 2^d < end, or the last point
     hi = o + 1 == cells ? uint32_t(m) : uint32_t((end - 1) >> d);
   };
+  const bool avx2 = have_avx2();
   tbb::parallel_for(tbb::blocked_range<size_t>(0, np, 64), [&](const auto& r) {
     alignas(32) float sv[kLanes], tv[kLanes];
     size_t idx[kLanes];
@@ -442,7 +451,7 @@ void evaluate_grids(const PatchTable& table, std::span<const float> points, int 
       uint32_t i0, i1, j0, j1;
       range(p.u, p.depth, i0, i1), range(p.v, p.depth, j0, j1);
       const float cells = float(1u << p.depth), inv = 1.0f / float(m);
-      const bool block = kHaveAvx2 && regular && p.type == PatchType::regular;
+      const bool block = avx2 && regular && p.type == PatchType::regular;
       const uint32_t* cv = regular ? &table.regular_points[16 * patch] : nullptr;
       int lanes = 0;
       auto flush = [&] {
