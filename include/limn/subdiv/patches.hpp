@@ -73,7 +73,9 @@ struct PatchStats {
 };
 
 /// Flat, GPU-ready patch table. Points are numbered globally: the cage's, then each refined
-/// level's local points (level_offsets[k] is the first of level k), then the end-cap points.
+/// level's points (level_offsets[k] is the first of level k), then the end-cap points. A level
+/// keeps only the refined points that patches use, directly or through the next level's
+/// stencils (in the refinement's order), so its stencils are no more than drawing needs.
 struct PatchTable {
   SubdivOptions options;
   std::vector<uint32_t> level_offsets;       ///< first point of each level; back() = end-cap base
