@@ -35,8 +35,7 @@ double median_ms(F&& f) {
     f();
     t.push_back(now_ms() - t0);
   }
-  std::sort(t.begin(), t.end());
-  return t[1];
+  return limn::bench::median(t);
 }
 
 struct P3 {

@@ -94,8 +94,23 @@ void crease_basis(double t, double s, double w[4], double d[4]) {
   }
 }
 
-// 16 control points, tensor-product weights: the hot loop of every evaluation, kept in float
-// with fixed trip counts so the compiler vectorises it.
+// 16 control points, tensor-product weights: the hot loop of every scalar evaluation, kept in
+// float with fixed trip counts so the compiler vectorises it; rows accumulated first.
+void tensor(const uint32_t* cv, const float wu[4], const float du[4], const float wv[4],
+            const float dv[4], const float* pts, float p[3], float pu[3], float pv[3]) {
+  for (int c = 0; c < 3; ++c) p[c] = pu[c] = pv[c] = 0;
+  for (int y = 0; y < 4; ++y) {
+    float rp[3] = {}, ru[3] = {};
+    for (int x = 0; x < 4; ++x) {
+      const float* q = pts + 3 * size_t(cv[4 * y + x]);
+      for (int c = 0; c < 3; ++c) rp[c] += wu[x] * q[c], ru[c] += du[x] * q[c];
+    }
+    for (int c = 0; c < 3; ++c)
+      p[c] += wv[y] * rp[c], pu[c] += wv[y] * ru[c], pv[c] += dv[y] * rp[c];
+  }
+}
+
+// A regular patch in general: boundary folding and single creases, weights in double.
 void eval_regular(const uint32_t* cv, const PatchParam& pp, double s, double t, const float* pts,
                   Eval& e) {
   const uint8_t boundary = pp.boundary;
@@ -120,17 +135,11 @@ void eval_regular(const uint32_t* cv, const PatchParam& pp, double s, double t, 
       d[i] = mirror ? -cd[3 - i] : cd[i];
     }
   }
-  float p[3] = {}, pu[3] = {}, pv[3] = {};
-  for (int y = 0; y < 4; ++y) {
-    float rp[3] = {}, ru[3] = {};
-    for (int x = 0; x < 4; ++x) {
-      const float* q = pts + 3 * size_t(cv[4 * y + x]);
-      const float a = float(wu[x]), b = float(du[x]);
-      for (int c = 0; c < 3; ++c) rp[c] += a * q[c], ru[c] += b * q[c];
-    }
-    const float a = float(wv[y]), b = float(dv[y]);
-    for (int c = 0; c < 3; ++c) p[c] += a * rp[c], pu[c] += a * ru[c], pv[c] += b * rp[c];
-  }
+  float fu[4], fdu[4], fv[4], fdv[4];
+  for (int i = 0; i < 4; ++i)
+    fu[i] = float(wu[i]), fdu[i] = float(du[i]), fv[i] = float(wv[i]), fdv[i] = float(dv[i]);
+  float p[3], pu[3], pv[3];
+  tensor(cv, fu, fdu, fv, fdv, pts, p, pu, pv);
   for (int c = 0; c < 3; ++c) e.p[c] = p[c], e.du[c] = pu[c], e.dv[c] = pv[c];
 }
 
@@ -174,16 +183,8 @@ inline void eval_plain(const uint32_t* cv, float s, float t, float scale, const 
                        float* p_out, float* du_out, float* dv_out) {
   float wu[4], du[4], wv[4], dv[4];
   bspline(s, wu, du), bspline(t, wv, dv);
-  float p[3] = {}, pu[3] = {}, pv[3] = {};
-  for (int y = 0; y < 4; ++y) {
-    float rp[3] = {}, ru[3] = {};
-    for (int x = 0; x < 4; ++x) {
-      const float* q = pts + 3 * size_t(cv[4 * y + x]);
-      for (int c = 0; c < 3; ++c) rp[c] += wu[x] * q[c], ru[c] += du[x] * q[c];
-    }
-    for (int c = 0; c < 3; ++c)
-      p[c] += wv[y] * rp[c], pu[c] += wv[y] * ru[c], pv[c] += dv[y] * rp[c];
-  }
+  float p[3], pu[3], pv[3];
+  tensor(cv, wu, du, wv, dv, pts, p, pu, pv);
   for (int c = 0; c < 3; ++c) {
     p_out[c] = p[c];
     if (du_out) du_out[c] = pu[c] * scale;
@@ -373,10 +374,6 @@ void evaluate_patches(const PatchTable& table, std::span<const float> points,
   if (points.size() < 3 * table.point_count())
     throw InputError("evaluate patches: fewer points than the patch table needs");
   const size_t nr = table.regular_params.size(), np = table.patch_count();
-  auto eval_one = [&](size_t i, const PatchCoord& c, const PatchParam& p) {
-    eval_point(table, points.data(), c, p, position + 3 * i, du ? du + 3 * i : nullptr,
-               dv ? dv + 3 * i : nullptr);
-  };
   // Points of one plain or boundary regular patch go through the AVX2 block kernel 8 at a time:
   // within each window of 64 points they are grouped by patch first (a grid over a face
   // isolated around an extraordinary vertex meets each of its patches in short runs, row after
@@ -403,7 +400,8 @@ void evaluate_patches(const PatchTable& table, std::span<const float> points,
           last = g;
           continue;
         }
-        eval_one(i, c, p);
+        eval_point(table, points.data(), c, p, position + 3 * i, du ? du + 3 * i : nullptr,
+                   dv ? dv + 3 * i : nullptr);
       }
       for (size_t g = 0; g < groups; ++g) {
         const uint32_t patch = group_patch[g];
@@ -461,8 +459,8 @@ void evaluate_grids(const PatchTable& table, std::span<const float> points, int 
                            dv);
         lanes = 0;
       };
-      for (uint32_t j = j0; j <= j1 && j0 <= j1; ++j)
-        for (uint32_t i = i0; i <= i1 && i0 <= i1; ++i) {
+      for (uint32_t j = j0; j <= j1; ++j)  // empty where the patch holds no grid line
+        for (uint32_t i = i0; i <= i1; ++i) {
           const float s = std::clamp(float(i) * inv * cells - float(p.u), 0.0f, 1.0f);
           const float t = std::clamp(float(j) * inv * cells - float(p.v), 0.0f, 1.0f);
           const size_t o = size_t(p.ptex) * per + size_t(j) * size_t(n) + i;

@@ -257,11 +257,22 @@ class Builder {
   PatchTable out_;
   PatchStats* stats_ = nullptr;
   double emit_ms_ = 0;
-  uint32_t level_start_ = 0;                          // global id of this level's first point
-  std::vector<uint32_t> level_points_;                // points of each level, as refined
+  std::vector<uint32_t> level_offsets_{0};  // first global point id of each level, as refined
   std::vector<std::vector<uint32_t>> node_of_level_;  // hierarchy: node of each level's faces
   GregoryCap cap_;                                    // reused: its buffers stay allocated
 };
+
+// Whether an edge at v is non-manifold or joins two faces that disagree on its direction.
+bool torn(const Topo& t, const uint32_t* fv, uint32_t v) {
+  for (uint32_t i = t.vertex_offsets[v]; i < t.vertex_offsets[v + 1]; ++i) {
+    const uint32_t c = t.vertex_corners[i];
+    for (const uint32_t h : {c, t.corner_prev[c]}) {
+      const uint32_t tw = t.corner_twin[h];
+      if (tw == kNonManifold || (tw != kNone && fv[tw] == fv[h])) return true;
+    }
+  }
+  return false;
+}
 
 RingView Builder::ring(Level& L, const RefinedLevel& R, uint32_t v) const {
   if (L.ring_at.empty()) {
@@ -273,15 +284,11 @@ RingView Builder::ring(Level& L, const RefinedLevel& R, uint32_t v) const {
     const Topo& t = L.topo;
     const uint32_t* fv = R.face_vertices.data();
     const uint32_t s0 = t.vertex_offsets[v], n = t.vertex_offsets[v + 1] - s0;
-    bool boundary = false, manifold = n > 0, quads = true;
+    bool boundary = false, manifold = n > 0 && !torn(t, fv, v), quads = true;
     uint32_t start = n ? t.vertex_corners[s0] : kNone;
-    for (uint32_t i = 0; i < n; ++i) {
+    for (uint32_t i = 0; i < n && !boundary; ++i) {
       const uint32_t c = t.vertex_corners[s0 + i];
-      for (const uint32_t h : {c, t.corner_prev[c]}) {
-        const uint32_t tw = t.corner_twin[h];
-        if (tw == kNonManifold || (tw != kNone && fv[tw] == fv[h])) manifold = false;
-      }
-      if (t.corner_twin[c] == kNone && !boundary) start = c, boundary = true;
+      if (t.corner_twin[c] == kNone) start = c, boundary = true;
     }
     const uint32_t at = uint32_t(L.ring_face.size());
     uint32_t faces = 0;
@@ -403,17 +410,8 @@ Ring Builder::span(const Level& L, const RefinedLevel& R, uint32_t corner, bool&
   }
   g.manifold = g.face.size() == n || g.boundary;
   const bool fan = g.face.size() == n;  // the span is the vertex's only fan
-  bool manifold_vertex = fan;
-  if (!fan) {  // one fan cut by boundaries or sharp edges, or several fans (non-manifold)?
-    manifold_vertex = true;
-    for (uint32_t i = t.vertex_offsets[v]; i < t.vertex_offsets[v + 1]; ++i) {
-      const uint32_t h = t.vertex_corners[i];
-      for (const uint32_t x : {h, t.corner_prev[h]}) {
-        const uint32_t tw = t.corner_twin[x];
-        if (tw == kNonManifold || (tw < kNonManifold && fv[tw] == fv[x])) manifold_vertex = false;
-      }
-    }
-  }
+  // One fan cut by boundaries or sharp edges, or several fans (non-manifold)?
+  const bool manifold_vertex = fan || !torn(t, fv, v);
   if (!o_.inf_sharp_patches || !manifold_vertex) {
     sharp = g.boundary && g.face.size() == 1;
   } else {
@@ -871,7 +869,7 @@ void Builder::emit(size_t k, const SparseLevel& S) {
     Level& L = levels_[k];
     const RefinedLevel& R = S.level;
     const Topo& t = L.topo;
-    const uint32_t off = level_start_;
+    const uint32_t off = level_offsets_.back();
     std::vector<uint32_t>& node_of = node_of_level.emplace_back();
     if (h_) {
       // Nodes: every face this level covers; a child of the node of the face it came from.
@@ -1027,8 +1025,7 @@ void Builder::emit(size_t k, const SparseLevel& S) {
       }
     }
   }
-  level_start_ += uint32_t(S.level.vertex_count());
-  level_points_.push_back(uint32_t(S.level.vertex_count()));
+  level_offsets_.push_back(level_offsets_.back() + uint32_t(S.level.vertex_count()));
   emit_ms_ += ms_since(t0);
 }
 
@@ -1085,8 +1082,7 @@ void Builder::build(PatchTable& out, SparseRefinement& r, PatchStats* stats) {
   const auto t0 = std::chrono::steady_clock::now();
   out = std::move(out_);
   out.options = o_.subdiv;
-  out.level_offsets.assign(1, 0);
-  for (const uint32_t n : level_points_) out.level_offsets.push_back(out.level_offsets.back() + n);
+  out.level_offsets = std::move(level_offsets_);
   out.level_stencils = std::move(r.stencils);
   prune_points(out);
   out.ptex_count = ptex_count_;
@@ -1099,8 +1095,8 @@ void Builder::build(PatchTable& out, SparseRefinement& r, PatchStats* stats) {
   const uint32_t cap_base = out.level_offsets.back();
   for (uint32_t& p : out.gregory_points) p += cap_base;
   if (stats) {
-    stats->regular_by_level.resize(level_points_.size(), 0);
-    stats->gregory_by_level.resize(level_points_.size(), 0);
+    stats->regular_by_level.resize(out.level_offsets.size() - 1, 0);
+    stats->gregory_by_level.resize(out.level_offsets.size() - 1, 0);
     stats->points = out.point_count();
     stats->patches_ms = emit_ms_ + ms_since(t0);
   }
@@ -1124,17 +1120,31 @@ std::vector<float> PatchTable::points(std::span<const float> cage) const {
   return out;
 }
 
-PatchHierarchy build_patch_hierarchy(const Mesh& cage, const PatchOptions& options) {
+namespace {
+
+void check_depth(const PatchOptions& options) {
   if (options.depth < 0 || options.depth > 12)
     throw InputError(fmt::format("patches: depth {} out of range (0-12)", options.depth));
-  PatchHierarchy h;
-  Builder b(cage, options, {}, &h);
-  SparseRefinement r = refine_sparse(
+}
+
+// Runs the isolation with `b` deciding each level (and emitting its patches); the levels are
+// dropped as it goes, only the stencils come back.
+SparseRefinement isolate(const Mesh& cage, const PatchOptions& options, Builder& b) {
+  return refine_sparse(
       cage, options.subdiv,
       [&](size_t k, const SparseLevel& S, const LevelAdjacency& a, std::vector<uint8_t>& req) {
         b.request(k, S, a, req);
       },
       false);
+}
+
+}  // namespace
+
+PatchHierarchy build_patch_hierarchy(const Mesh& cage, const PatchOptions& options) {
+  check_depth(options);
+  PatchHierarchy h;
+  Builder b(cage, options, {}, &h);
+  SparseRefinement r = isolate(cage, options, b);
   b.build(h.table, r, nullptr);
   return h;
 }
@@ -1197,8 +1207,7 @@ PatchTable select_patches(const PatchHierarchy& h, std::span<const uint8_t> vert
 
 PatchTable build_patches(const Mesh& cage, const PatchOptions& options,
                          std::span<const uint8_t> vertex_depth, PatchStats* stats) {
-  if (options.depth < 0 || options.depth > 12)
-    throw InputError(fmt::format("patches: depth {} out of range (0-12)", options.depth));
+  check_depth(options);
   if (!vertex_depth.empty() && vertex_depth.size() != cage.vertex_count())
     throw InputError(fmt::format("patches: {} vertex depths for {} vertices", vertex_depth.size(),
                                  cage.vertex_count()));
@@ -1206,12 +1215,7 @@ PatchTable build_patches(const Mesh& cage, const PatchOptions& options,
   if (stats) *stats = {};
   Builder b(cage, options, vertex_depth);
   b.set_stats(stats);
-  SparseRefinement r = refine_sparse(
-      cage, options.subdiv,
-      [&](size_t k, const SparseLevel& S, const LevelAdjacency& a, std::vector<uint8_t>& req) {
-        b.request(k, S, a, req);
-      },
-      false);
+  SparseRefinement r = isolate(cage, options, b);
   PatchTable out;
   b.build(out, r, stats);
   // Patches are emitted while the refinement runs: refine_ms is the rest.
