@@ -21,7 +21,7 @@ namespace {
 struct AdaptiveOpts {
   int depth = -1, max_depth = 10, tess = 4;
   float tolerance = -1, tess_px = 0;
-  std::string camera, resolution;
+  std::string camera, resolution, errors = "measured";
   bool depth_colors = false, dynamic = false;  // dynamic: --tolerance was given
 };
 
@@ -70,6 +70,8 @@ void run_adaptive(const std::string& mesh, const std::string& out_path, const st
     throw InputError(fmt::format("{}: cannot tell the output format from the extension", out_path));
   const bool dynamic = a.dynamic;
   if (dynamic && a.depth >= 0) throw InputError("--depth and --tolerance exclude each other");
+  if (a.errors != "measured" && a.errors != "estimated")
+    throw InputError(fmt::format("--errors {}: expected 'measured' or 'estimated'", a.errors));
   if (dynamic && !(a.tolerance > 0 && std::isfinite(a.tolerance)))
     throw InputError(
         fmt::format("--tolerance {}: must be a positive number of pixels", a.tolerance));
@@ -87,12 +89,22 @@ void run_adaptive(const std::string& mesh, const std::string& out_path, const st
   const SubdivOptions options = subdiv_options(cage);
   Camera cam = frame_camera(cage, w, h);
   if (!a.camera.empty()) cam = parse_camera(a.camera, cam);
-  const VertexErrorModel model = vertex_error_model(cage, options);
+  VertexErrorModel model = vertex_error_model(cage, options);
   PatchOptions po;
   po.subdiv = options;
   po.depth = dynamic ? a.max_depth : depth;
   std::vector<uint8_t> vdepth;
   std::vector<float> estimate;
+  // Measured errors: every patch down to --max-depth once, its end caps' errors measured, and
+  // the view's patches selected from it (no second isolation).
+  const bool measured = dynamic && a.errors == "measured";
+  PatchHierarchy hierarchy;
+  if (measured) {
+    hierarchy = build_patch_hierarchy(cage, po);
+    timings["hierarchy"] = sw.lap();
+    measure_vertex_errors(cage, hierarchy, model);
+    timings["measure"] = sw.lap();
+  }
   if (dynamic) {
     DepthOptions d;
     d.tolerance_px = a.tolerance;
@@ -106,11 +118,25 @@ void run_adaptive(const std::string& mesh, const std::string& out_path, const st
   }
   timings["select"] = sw.lap();
   PatchStats ps;
-  const PatchTable table = build_patches(cage, po, vdepth, &ps);
-  timings["isolate"] = ps.refine_ms;
-  timings["patches"] = ps.patches_ms;
-  sw.lap();
-  const std::vector<float> points = table.points(cage.positions);
+  PatchTable table;
+  if (measured) {
+    table = select_patches(hierarchy, vdepth);
+    timings["select_patches"] = sw.lap();
+    for (const auto* params : {&table.regular_params, &table.gregory_params})
+      for (const PatchParam& p : *params) {
+        if (ps.regular_by_level.size() <= p.level) {
+          ps.regular_by_level.resize(p.level + 1u, 0);
+          ps.gregory_by_level.resize(p.level + 1u, 0);
+        }
+        ++(p.type == PatchType::gregory ? ps.gregory_by_level : ps.regular_by_level)[p.level];
+      }
+  } else {
+    table = build_patches(cage, po, vdepth, &ps);
+    timings["isolate"] = ps.refine_ms;
+    timings["patches"] = ps.patches_ms;
+    sw.lap();
+  }
+  const std::vector<float> points = (measured ? hierarchy.table : table).points(cage.positions);
   timings["points"] = sw.lap();
   TessellateOptions to;
   to.factor = a.tess;
@@ -149,6 +175,7 @@ void run_adaptive(const std::string& mesh, const std::string& out_path, const st
         {"mode", dynamic ? "tolerance" : "depth"},
         {"depth", dynamic ? a.max_depth : depth},
         {"tolerance_px", dynamic ? nlohmann::json(a.tolerance) : nlohmann::json(nullptr)},
+        {"errors", dynamic ? nlohmann::json(a.errors) : nlohmann::json("estimated")},
         {"camera",
          {{"eye", {cam.eye[0], cam.eye[1], cam.eye[2]}},
           {"target", {cam.target[0], cam.target[1], cam.target[2]}},
@@ -200,6 +227,10 @@ void add_subdivide(CLI::App& app) {
   cmd->add_option("--tolerance", o->a.tolerance,
                   "--adaptive: screen error in pixels; picks a depth per vertex from the camera");
   cmd->add_option("--max-depth", o->a.max_depth, "--adaptive --tolerance: deepest level (0-12)");
+  cmd->add_option("--errors", o->a.errors,
+                  "--adaptive --tolerance: 'measured' (default: every end cap down to "
+                  "--max-depth compared with the deepest surface) or 'estimated' (per-valence "
+                  "constants; no hierarchy, for very large cages)");
   cmd->add_option("--camera", o->a.camera,
                   "ex,ey,ez,tx,ty,tz,fovy_deg (default: frames the model from the front)");
   cmd->add_option("--resolution", o->a.resolution, "Image size WxH for --tolerance (1280x720)");
@@ -215,8 +246,8 @@ void add_subdivide(CLI::App& app) {
     if (o->adaptive == uniform)
       throw InputError("subdivide: give exactly one of --uniform L and --adaptive");
     if (!o->adaptive)
-      for (const char* a : {"--depth", "--tolerance", "--max-depth", "--camera", "--resolution",
-                            "--tess", "--tess-px", "--depth-colors"})
+      for (const char* a : {"--depth", "--tolerance", "--max-depth", "--errors", "--camera",
+                            "--resolution", "--tess", "--tess-px", "--depth-colors"})
         if (cmd->count(a)) throw InputError(fmt::format("{} goes with --adaptive", a));
     if (o->adaptive) {
       if (o->limit) throw InputError("--limit goes with --uniform (--adaptive is the limit)");

@@ -2,10 +2,12 @@
 #include "limn/subdiv/depth.hpp"
 
 #include <fmt/format.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
 
 #include "limn/mesh/topology.hpp"
 
@@ -98,6 +100,27 @@ bool Camera::project(const float p[3], double& x, double& y) const {
   x = 0.5 * width + a.f_px * dot3(d, r) / z;
   y = 0.5 * height - a.f_px * dot3(d, u) / z;
   return true;
+}
+
+bool Camera::ball_outside(const float p[3], double radius) const {
+  const ViewAxis a = view_axis(*this);
+  if (!(a.distance > 0)) return false;
+  const double* f = a.f;
+  double r[3] = {f[1] * up[2] - f[2] * up[1], f[2] * up[0] - f[0] * up[2],
+                 f[0] * up[1] - f[1] * up[0]};
+  const double l = std::sqrt(dot3(r, r));
+  if (!(l > 0)) return false;
+  for (double& c : r) c /= l;
+  const double u[3] = {r[1] * f[2] - r[2] * f[1], r[2] * f[0] - r[0] * f[2],
+                       r[0] * f[1] - r[1] * f[0]};
+  const double d[3] = {double(p[0]) - eye[0], double(p[1]) - eye[1], double(p[2]) - eye[2]};
+  const double z = dot3(d, f), x = dot3(d, r), y = dot3(d, u);
+  if (z + radius <= 0) return true;
+  // Side planes through the eye: x = +-z w / (2 f_px), y = +-z h / (2 f_px); their distance
+  // from the ball's centre against the radius.
+  const double hx = 0.5 * width / a.f_px, hy = 0.5 * height / a.f_px;
+  const double nx = 1.0 / std::sqrt(1.0 + hx * hx), ny = 1.0 / std::sqrt(1.0 + hy * hy);
+  return (std::abs(x) - hx * z) * nx > radius || (std::abs(y) - hy * z) * ny > radius;
 }
 
 Camera frame_camera(const Mesh& mesh, int width, int height) {
@@ -218,6 +241,152 @@ VertexErrorModel vertex_error_model(const Mesh& cage, const SubdivOptions& optio
   return m;
 }
 
+namespace {
+
+// Samples per end-cap edge in measure_vertex_errors, and the margin on the largest sampled
+// error for what lies between samples (the error is smooth over a patch: at most a few per cent
+// above the 5 x 5 maximum in the deep-reference tests).
+constexpr int kSamples = 5;
+constexpr double kSampleMargin = 1.15;
+
+}  // namespace
+
+void measure_vertex_errors(const Mesh& cage, const PatchHierarchy& h, VertexErrorModel& m) {
+  const size_t nv = cage.vertex_count();
+  const PatchTable& t = h.table;
+  if (m.k.size() != nv)
+    throw InputError("measure vertex errors: the error model is another cage's");
+  if (t.level_offsets.size() < 2 || t.level_offsets[1] != nv || h.roots.empty() != (nv == 0))
+    throw InputError("measure vertex errors: the hierarchy is another cage's");
+  int depth = 0;
+  for (const uint8_t l : h.node_level) depth = std::max(depth, int(l));
+  m.levels = depth;
+  m.level_error.assign(nv * size_t(depth), 0.0f);
+  m.level_reach.assign(nv * size_t(depth), 0.0f);
+  if (depth == 0) return;
+  const size_t nr = t.regular_params.size();
+  auto patch_of = [&](uint32_t node) {
+    const uint32_t p = h.node_patch[node];
+    return p & kPatchGregory ? uint32_t(nr) + (p & ~kPatchGregory) : p;
+  };
+  auto param = [&](uint32_t patch) -> const PatchParam& {
+    return patch < nr ? t.regular_params[patch] : t.gregory_params[patch - nr];
+  };
+  // End caps that have a deeper surface below them and whose level some vertex's depth decides.
+  std::vector<uint32_t> caps;
+  for (uint32_t n = 0; n < h.node_count(); ++n)
+    if (h.node_patch[n] != kNone && (h.node_patch[n] & kPatchGregory) &&
+        h.node_first_child[n] != kNone && h.node_src_offsets[n + 1] > h.node_src_offsets[n])
+      caps.push_back(n);
+  constexpr size_t kPer = size_t(kSamples) * kSamples;
+  std::vector<PatchCoord> at(caps.size() * kPer), deep(caps.size() * kPer);
+  tbb::parallel_for(size_t(0), caps.size(), [&](size_t i) {
+    const uint32_t n = caps[i], patch = patch_of(n);
+    const PatchParam& pp = param(patch);
+    const double size = 1.0 / double(1u << pp.depth);
+    for (int y = 0; y < kSamples; ++y)
+      for (int x = 0; x < kSamples; ++x) {
+        const float s = float(x) / (kSamples - 1), tt = float(y) / (kSamples - 1);
+        const size_t j = i * kPer + size_t(y) * kSamples + size_t(x);
+        at[j] = {patch, s, tt};
+        // The deepest node over the sample: children split their parent's ptex square.
+        const double u = (pp.u + double(s)) * size, v = (pp.v + double(tt)) * size;
+        uint32_t node = n, leaf_patch = patch;
+        while (h.node_first_child[node] != kNone) {
+          uint32_t next = kNone;
+          for (uint32_t c = 0; c < h.node_children[node] && next == kNone; ++c) {
+            const uint32_t child = h.node_first_child[node] + c;
+            if (h.node_patch[child] == kNone) continue;
+            const PatchParam& q = param(patch_of(child));
+            const double cs = 1.0 / double(1u << q.depth), eps = 1e-9;
+            if (u >= q.u * cs - eps && u <= (q.u + 1) * cs + eps && v >= q.v * cs - eps &&
+                v <= (q.v + 1) * cs + eps)
+              next = child;
+          }
+          if (next == kNone) throw std::logic_error("measure vertex errors: a sample has no child");
+          node = next;
+          leaf_patch = patch_of(node);
+        }
+        const PatchParam& q = param(leaf_patch);
+        const double cs = double(1u << q.depth);
+        deep[j] = {leaf_patch, float(std::clamp(u * cs - q.u, 0.0, 1.0)),
+                   float(std::clamp(v * cs - q.v, 0.0, 1.0))};
+      }
+  });
+  const std::vector<float> points = t.points(cage.positions);
+  std::vector<float> pa(3 * at.size()), pb(3 * deep.size());
+  evaluate_patches(t, points, at, pa.data());
+  evaluate_patches(t, points, deep, pb.data());
+  for (size_t i = 0; i < caps.size(); ++i) {
+    const uint32_t n = caps[i];
+    double err = 0;
+    for (size_t j = i * kPer; j < (i + 1) * kPer; ++j)
+      err = std::max(
+          err, std::hypot(double(pa[3 * j]) - pb[3 * j], double(pa[3 * j + 1]) - pb[3 * j + 1],
+                          double(pa[3 * j + 2]) - pb[3 * j + 2]));
+    for (uint32_t k = h.node_src_offsets[n]; k < h.node_src_offsets[n + 1]; ++k) {
+      const uint32_t v = h.node_src[k];
+      const float* c = &cage.positions[3 * size_t(v)];
+      double reach = 0;
+      for (size_t j = i * kPer; j < (i + 1) * kPer; ++j)
+        reach = std::max(reach, std::hypot(double(pb[3 * j]) - c[0], double(pb[3 * j + 1]) - c[1],
+                                           double(pb[3 * j + 2]) - c[2]));
+      const size_t slot = size_t(v) * size_t(depth) + h.node_level[n];
+      m.level_error[slot] = std::max(m.level_error[slot], float(err));
+      m.level_reach[slot] = std::max(m.level_reach[slot], float(reach));
+    }
+  }
+}
+
+namespace {
+
+// The measured error bound of v at depth d (object units) and the reach of its end caps.
+double measured_error(const VertexErrorModel& m, size_t v, int d, double& reach) {
+  const int levels = m.levels;
+  const double r = double(m.mu[v]);
+  const size_t slot = v * size_t(levels) + size_t(std::min(d, levels - 1));
+  double e = kSampleMargin * m.level_error[slot] + double(m.k[v]) * std::pow(r, levels);
+  reach = m.level_reach[slot];
+  if (d >= levels) {  // below the hierarchy: the error shrinks as the model says
+    const double f = std::pow(r, d - levels + 1);
+    e *= f, reach *= f;
+  }
+  return e;
+}
+
+// The shallowest depth whose measured error projects within the tolerance, with hysteresis
+// against `previous`: the continuous need interpolates the error between levels.
+int measured_depth(const Mesh& cage, const VertexErrorModel& m, const Camera& camera,
+                   const DepthOptions& o, size_t v, std::span<const uint8_t> previous) {
+  const float* p = &cage.positions[3 * v];
+  // Every end cap v's depth governs lies within its reach at some level (the margin covers
+  // the patch between samples).
+  double reach = m.radius[v];
+  for (int d = 0; d < m.levels; ++d)
+    reach = std::max(reach, double(m.level_reach[v * size_t(m.levels) + size_t(d)]));
+  if (camera.ball_outside(p, kSampleMargin * reach)) return o.min_depth;
+  auto ratio = [&](int d) {
+    double at;
+    const double e = measured_error(m, v, d, at);
+    return e * camera.scale_at(p, at) / o.tolerance_px;
+  };
+  int depth = 0;
+  double here = ratio(0), above = here;
+  while (depth < 12 && here > 1.0) above = here, here = ratio(++depth);
+  double need;
+  if (depth == 0) {
+    need = here > 0 ? std::log(here) / std::log(1.0 / double(m.mu[v])) : -1e9;
+  } else {
+    const double span = std::log(above / std::max(here, 1e-300));
+    need = depth - 1 + (span > 0 ? std::min(1.0, std::log(above) / span) : 1.0);
+  }
+  if (!previous.empty() && previous[v] > depth && need > previous[v] - 1 - o.hysteresis)
+    depth = previous[v];
+  return depth;
+}
+
+}  // namespace
+
 std::vector<uint8_t> select_depths(const Mesh& cage, const VertexErrorModel& model,
                                    const Camera& camera, const DepthOptions& o,
                                    std::span<const uint8_t> previous,
@@ -231,6 +400,9 @@ std::vector<uint8_t> select_depths(const Mesh& cage, const VertexErrorModel& mod
   if (!overrides.empty() && overrides.size() != nv)
     throw InputError(
         fmt::format("select depths: {} overrides for {} vertices", overrides.size(), nv));
+  if (model.levels < 0 || model.level_error.size() != nv * size_t(model.levels) ||
+      model.level_reach.size() != model.level_error.size())
+    throw InputError("select depths: the measured errors are another cage's");
   if (!(o.tolerance_px > 0))
     throw InputError(
         fmt::format("select depths: tolerance {} px must be positive", o.tolerance_px));
@@ -242,6 +414,9 @@ std::vector<uint8_t> select_depths(const Mesh& cage, const VertexErrorModel& mod
   for (size_t v = 0; v < nv; ++v) {
     if (!overrides.empty() && overrides[v] != 255) {
       d[v] = std::min<uint8_t>(overrides[v], 12);
+    } else if (model.levels > 0) {
+      const int depth = measured_depth(cage, model, camera, o, v, previous);
+      d[v] = uint8_t(std::clamp(depth, o.min_depth, o.max_depth));
     } else if (model.k[v] > 0) {
       // The error left at depth d lies in the end caps, within radius * r^d of v (the ring
       // shrinks by at most r per level): take the scale there, and the shallowest d that is
@@ -260,7 +435,11 @@ std::vector<uint8_t> select_depths(const Mesh& cage, const VertexErrorModel& mod
         depth = previous[v];
       d[v] = uint8_t(std::clamp(depth, o.min_depth, o.max_depth));
     }
-    if (estimate_px && model.k[v] > 0) {
+    if (estimate_px && model.levels > 0) {
+      double reach;
+      const double e = measured_error(model, v, d[v], reach);
+      (*estimate_px)[v] = float(e * camera.scale_at(&cage.positions[3 * v], reach));
+    } else if (estimate_px && model.k[v] > 0) {
       const double reach = model.radius[v] * std::pow(double(model.mu[v]), d[v]);
       (*estimate_px)[v] = float(model.k[v] * camera.scale_at(&cage.positions[3 * v], reach) *
                                 std::pow(double(model.mu[v]), d[v]));

@@ -23,7 +23,6 @@ namespace limn {
 namespace {
 
 constexpr int kMaxDepth = 16;
-constexpr uint32_t kPatchGregory = 0x80000000u;  // hierarchy: node_patch of an end cap
 constexpr float kInf = kInfiniteSharpness;
 
 double ms_since(std::chrono::steady_clock::time_point t0) {

@@ -320,6 +320,19 @@ TEST_F(Cli, SubdivideAdaptiveToleranceFollowsTheCamera) {
   };
   const size_t near = patches("0,2,2.5,0,0,0,45"), far = patches("0,8,10,0,0,0,45");
   EXPECT_GT(near, far);
+  // Both error sources give a watertight surface within the tolerance they estimate.
+  for (const char* errors : {"measured", "estimated"}) {
+    const Result r =
+        limn("subdivide " + q(cage) + " -o " + q(dir_ / "e.ply") +
+             " --adaptive --tolerance 1 --json --camera 0,2,2.5,0,0,0,45 --errors " + errors);
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j["errors"], errors);
+    EXPECT_LE(double(j["estimated_max_error_px"]), 1.0);
+    const Mesh m = read_mesh(dir_ / "e.ply");
+    EXPECT_EQ(analyze(m, build_topology(m)).boundary_edges, 0u) << errors;
+    EXPECT_EQ(j["output_faces"], m.face_count());
+  }
   // Screen-space tessellation: a closer camera gives more triangles, and stays watertight.
   auto triangles = [&](const std::string& camera) {
     const Result r = limn("subdivide " + q(cage) + " -o " + q(dir_ / "s.ply") +
@@ -337,14 +350,26 @@ TEST_F(Cli, SubdivideAdaptiveToleranceFollowsTheCamera) {
 TEST_F(Cli, SubdivideAdaptiveRejectsBadOptions) {
   const fs::path cage = dir_ / "cube.obj";
   ASSERT_EQ(limn("shape cube -o " + q(cage)).code, 0);
-  for (const char* bad :
-       {"--adaptive --uniform 2", "--uniform 2 --tess 3", "--adaptive --tess 0",
-        "--adaptive --tess 65", "--adaptive --depth 13", "--adaptive --depth 2 --tolerance 1",
-        "--adaptive --tolerance 0", "--adaptive --tolerance -3", "--adaptive --camera 1,2,3",
-        "--adaptive --camera 0,0,5,0,0,0,200", "--adaptive --camera a,0,5,0,0,0,45",
-        "--adaptive --tolerance 1 --resolution 640", "--adaptive --tolerance 1 --resolution 0x10",
-        "--adaptive --limit", "--adaptive --max-depth 20", "--adaptive --tess-px 0",
-        "--adaptive --tess 3 --tess-px 4", "--uniform 1 --tess-px 4"}) {
+  for (const char* bad : {"--adaptive --uniform 2",
+                          "--uniform 2 --tess 3",
+                          "--adaptive --tess 0",
+                          "--adaptive --tess 65",
+                          "--adaptive --depth 13",
+                          "--adaptive --depth 2 --tolerance 1",
+                          "--adaptive --tolerance 0",
+                          "--adaptive --tolerance -3",
+                          "--adaptive --camera 1,2,3",
+                          "--adaptive --camera 0,0,5,0,0,0,200",
+                          "--adaptive --camera a,0,5,0,0,0,45",
+                          "--adaptive --tolerance 1 --resolution 640",
+                          "--adaptive --tolerance 1 --resolution 0x10",
+                          "--adaptive --limit",
+                          "--adaptive --max-depth 20",
+                          "--adaptive --tess-px 0",
+                          "--adaptive --tess 3 --tess-px 4",
+                          "--uniform 1 --tess-px 4",
+                          "--adaptive --tolerance 1 --errors guessed",
+                          "--uniform 1 --errors estimated"}) {
     const Result r = limn("subdivide " + q(cage) + " -o " + q(dir_ / "x.ply") + " " + bad);
     EXPECT_EQ(r.code, 2) << bad << ": " << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << bad << ": " << r.err;

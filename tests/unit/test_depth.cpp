@@ -26,9 +26,8 @@ TEST(Depth, EigenvaluesMatchTheDesignTable) {
   }
 }
 
-double max_screen_error(const Mesh& cage, const test::Reference& ref, const Camera& cam,
-                        float tolerance, int* deepest) {
-  const VertexErrorModel model = vertex_error_model(cage, subdiv_options(cage));
+double max_screen_error(const Mesh& cage, const VertexErrorModel& model, const test::Reference& ref,
+                        const Camera& cam, float tolerance, int* deepest) {
   DepthOptions d;
   d.tolerance_px = tolerance;
   d.max_depth = 12;
@@ -57,6 +56,9 @@ double max_screen_error(const Mesh& cage, const test::Reference& ref, const Came
   return worst;
 }
 
+// Both error sources: the per-valence estimate, and the errors measured on a hierarchy to depth 9
+// (which compares end caps with that hierarchy's own deepest surface); the reference is
+// independent of both.
 TEST(Depth, ScreenErrorStaysWithinTolerance) {
   const int valences[] = {3, 5, 6, 8};
   Mesh torus = make_torus(16, 8, valences);
@@ -65,19 +67,97 @@ TEST(Depth, ScreenErrorStaysWithinTolerance) {
   const Mesh cube = make_shape("cube");
   for (const Mesh* cage : {static_cast<const Mesh*>(&torus), &cube}) {
     const test::Reference ref = test::reference(*cage, 7);
+    const VertexErrorModel estimated = vertex_error_model(*cage, subdiv_options(*cage));
+    VertexErrorModel measured = estimated;
+    PatchOptions ho;
+    ho.subdiv = subdiv_options(*cage);
+    ho.depth = 9;
+    measure_vertex_errors(*cage, build_patch_hierarchy(*cage, ho), measured);
     const Camera far = frame_camera(*cage, 640, 480);
     for (const float t : {0.5f, 2.0f}) {
       for (const float zoom : {1.0f, 0.6f, 0.35f}) {
         Camera c = far;
         for (int k = 0; k < 3; ++k) c.eye[k] = c.target[k] + zoom * (far.eye[k] - far.target[k]);
-        int deepest = 0;
-        const double e = max_screen_error(*cage, ref, c, t, &deepest);
-        EXPECT_LE(e, t) << "zoom " << zoom << " tolerance " << t << " deepest " << deepest;
-        std::printf("zoom %.2f tolerance %.1f px: deepest %d, max error %.3f px\n", zoom, t,
-                    deepest, e);
+        for (const VertexErrorModel* m :
+             {&estimated, static_cast<const VertexErrorModel*>(&measured)}) {
+          const char* label = m == &measured ? "measured " : "estimated";
+          int deepest = 0;
+          const double e = max_screen_error(*cage, *m, ref, c, t, &deepest);
+          EXPECT_LE(e, t) << "zoom " << zoom << " tolerance " << t << " deepest " << deepest << " "
+                          << label;
+          std::printf("%s zoom %.2f tolerance %.1f px: deepest %d, max error %.3f px\n", label,
+                      zoom, t, deepest, e);
+        }
       }
     }
   }
+}
+
+TEST(Depth, MeasuredErrorsAreTheCagesAndShrinkWithDepth) {
+  const int valences[] = {3, 5, 6};
+  const Mesh cage = make_torus(12, 8, valences);
+  VertexErrorModel m = vertex_error_model(cage, subdiv_options(cage));
+  PatchOptions ho;
+  ho.subdiv = subdiv_options(cage);
+  ho.depth = 6;
+  const PatchHierarchy h = build_patch_hierarchy(cage, ho);
+  measure_vertex_errors(cage, h, m);
+  ASSERT_EQ(m.levels, 6);
+  size_t measured = 0;
+  for (size_t v = 0; v < cage.vertex_count(); ++v) {
+    const float* e = &m.level_error[v * 6];
+    if (m.k[v] == 0) {  // regular vertices govern no end cap
+      EXPECT_EQ(*std::max_element(e, e + 6), 0.0f) << v;
+      continue;
+    }
+    ++measured;
+    EXPECT_GT(e[0], 0.0f) << v;
+    // Each level roughly halves the error; never grows by more than noise.
+    for (int d = 1; d < 6; ++d) EXPECT_LT(e[d], 0.9f * e[d - 1] + 1e-6f) << v << " " << d;
+  }
+  EXPECT_GT(measured, 0u);
+  // A selection with measured errors rejects tables of another size, and another cage's
+  // hierarchy is refused.
+  const Mesh other = make_shape("cube");
+  VertexErrorModel mo = vertex_error_model(other, subdiv_options(other));
+  EXPECT_THROW(measure_vertex_errors(other, h, mo), InputError);
+  VertexErrorModel broken = m;
+  broken.level_error.pop_back();
+  EXPECT_THROW(select_depths(cage, broken, frame_camera(cage, 64, 64), DepthOptions{}), InputError);
+}
+
+TEST(Depth, OutsideBallsNeverProjectIntoTheImage) {
+  Camera c;
+  c.eye[0] = 1, c.eye[1] = 2, c.eye[2] = 6;
+  c.width = 640, c.height = 360;
+  uint32_t state = 12345;
+  auto rnd = [&] {
+    state = state * 1664525u + 1013904223u;
+    return float(state >> 8) / float(1u << 24);
+  };
+  size_t outside = 0, inside = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const float p[3] = {20 * rnd() - 10, 20 * rnd() - 10, 20 * rnd() - 10};
+    const double r = 2.0 * rnd();
+    if (!c.ball_outside(p, r)) {
+      ++inside;
+      continue;
+    }
+    ++outside;
+    // No point of the ball may land in the image.
+    for (int k = 0; k < 50; ++k) {
+      float d[3] = {2 * rnd() - 1, 2 * rnd() - 1, 2 * rnd() - 1};
+      const float l = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+      const float q[3] = {p[0] + float(r) * d[0] / l, p[1] + float(r) * d[1] / l,
+                          p[2] + float(r) * d[2] / l};
+      double x, y;
+      if (c.project(q, x, y)) {
+        EXPECT_FALSE(x >= 0 && y >= 0 && x <= c.width && y <= c.height);
+      }
+    }
+  }
+  EXPECT_GT(outside, 1000u);
+  EXPECT_GT(inside, 1000u);
 }
 
 TEST(Depth, HysteresisHoldsDepthButNeverUnderShoots) {

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "limn/mesh/mesh.hpp"
+#include "limn/subdiv/patches.hpp"
 #include "limn/subdiv/refine.hpp"
 
 namespace limn {
@@ -34,6 +35,9 @@ struct Camera {
   double scale_at(const float p[3], double radius = 0) const;
   /// Projects p to pixel coordinates (x right, y down); false when p is behind the eye.
   bool project(const float p[3], double& x, double& y) const;
+  /// The ball of `radius` around p lies wholly outside the view (beyond a side of the image or
+  /// behind the eye), so nothing in it can be seen. Conservative: false when unsure.
+  bool ball_outside(const float p[3], double radius) const;
 };
 
 /// A camera looking at the bounding box's centre from +z (slightly raised), framing the whole
@@ -53,8 +57,24 @@ struct VertexErrorModel {
   std::vector<uint8_t> smooth;  ///< 1: a smooth interior extraordinary vertex (mu = mu_n)
   std::vector<float> radius;    ///< distance to the farthest ring vertex: the scale is taken at
                                 ///< the ring's nearest possible point, not only at v
+  /// Measured (measure_vertex_errors), levels 0 to levels - 1, levels per vertex: the largest
+  /// error in object units of the end caps that stay at that level because of v's depth, and
+  /// the farthest of their samples from v. Empty: the depths come from K_v and r_v alone.
+  int levels = 0;
+  std::vector<float> level_error, level_reach;
 };
 VertexErrorModel vertex_error_model(const Mesh& cage, const SubdivOptions& options);
+
+/// Replaces the estimate by measurement, for views that select from a hierarchy: every end cap
+/// of the hierarchy above its deepest level is compared, on a 5 x 5 grid of samples, with the
+/// hierarchy's own deepest surface there, and its error goes to each cage vertex whose depth
+/// keeps it (PatchHierarchy::node_src). The error of the deepest level itself (K_v r_v^D) is
+/// added, so the bound is against the exact limit; below the hierarchy's depth the error goes
+/// on shrinking by r_v per level. Exact per vertex where the valence factors are maxima over
+/// many rings, so views need fewer patches for the same tolerance. `hierarchy` must be the
+/// cage's. O(end caps * 25 * depth), multi-threaded.
+void measure_vertex_errors(const Mesh& cage, const PatchHierarchy& hierarchy,
+                           VertexErrorModel& model);
 
 struct DepthOptions {
   float tolerance_px = 0.5f;
@@ -66,7 +86,9 @@ struct DepthOptions {
 /// depth rises as soon as the view needs it and falls only when the need drops `hysteresis`
 /// levels below the current depth, so the tolerance holds while small camera moves do not
 /// flicker. `overrides` (empty, or one per vertex; 255 = none) pins depths. `estimate_px`, when
-/// given, gets each vertex's estimated screen error at its chosen depth. O(vertices).
+/// given, gets each vertex's estimated screen error at its chosen depth. With measured errors
+/// (measure_vertex_errors) a vertex whose end caps all lie outside the view keeps min_depth:
+/// what cannot be seen needs no accuracy. O(vertices).
 std::vector<uint8_t> select_depths(const Mesh& cage, const VertexErrorModel& model,
                                    const Camera& camera, const DepthOptions& options,
                                    std::span<const uint8_t> previous = {},

@@ -105,6 +105,9 @@ struct PatchTable {
 PatchTable build_patches(const Mesh& cage, const PatchOptions& options,
                          std::span<const uint8_t> vertex_depth = {}, PatchStats* stats = nullptr);
 
+/// PatchHierarchy::node_patch of an end cap: this bit | its index among the end caps.
+inline constexpr uint32_t kPatchGregory = 0x80000000u;
+
 /// Every patch a cage can need down to a depth, as a tree per cage face (OpenSubdiv's Bfr patch
 /// trees, Brainerd et al. 2016): the patch table of depth d_max everywhere plus, at every level,
 /// a patch (an end cap) over each face that goes deeper. A new view then only selects nodes
@@ -113,7 +116,7 @@ struct PatchHierarchy {
   PatchTable table;             ///< every node's patch; its points serve every selection
   std::vector<uint32_t> roots;  ///< the node of each covered cage face
   std::vector<uint8_t> node_level, node_force;  ///< force: always refined (non-quads)
-  std::vector<uint32_t> node_patch;  ///< regular index, or 0x80000000 | end-cap index; or kNone
+  std::vector<uint32_t> node_patch;  ///< regular index, or kPatchGregory | end-cap index; or kNone
   std::vector<uint32_t> node_first_child;  ///< children are consecutive; kNone for leaves
   std::vector<uint32_t> node_children;
   std::vector<uint32_t> node_neighbours;  ///< 4 per node: the node across each patch edge
