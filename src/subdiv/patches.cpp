@@ -88,6 +88,7 @@ struct CornerSharpness {
 };
 
 struct Topo {
+  bool quads = true;  // every face is a quad (a corner count of 4 per face is not enough)
   CornerRel<0> corner_face;
   CornerRel<1> corner_next;
   CornerRel<2> corner_prev;
@@ -98,7 +99,9 @@ struct Topo {
 Topo make_topo(const RefinedLevel& R, const LevelAdjacency& a) {
   Topo t;
   const size_t nc = R.face_vertices.size();
-  if (nc != 4 * R.face_count()) {
+  for (size_t f = 0; f < R.face_count() && t.quads; ++f)
+    t.quads = R.face_offsets[f + 1] - R.face_offsets[f] == 4;
+  if (!t.quads) {
     t.corner_face.table.resize(nc), t.corner_next.table.resize(nc), t.corner_prev.table.resize(nc);
     for (uint32_t f = 0; f < R.face_count(); ++f) {
       const uint32_t b = R.face_offsets[f], e = R.face_offsets[f + 1];
@@ -134,6 +137,8 @@ struct Level {
   std::vector<uint8_t> owned;              // per face: this level covers it (or a deeper one)
   std::vector<uint8_t> requested;          // per face: refined for its own sake
   std::vector<uint8_t> force;              // per face: refined whatever the depths (non-quads)
+  std::vector<uint8_t> role;               // region builds, per face: 2 emits patches, 1 may be
+                                           // refined, 0 context only (empty: all 2)
   std::vector<uint32_t> src_offsets, src;  // hierarchy: the cage vertices each vertex's depth
                                            // comes from (CSR, sorted)
   std::vector<int8_t> crease_edge;         // per face: local edge of a single crease, or -1
@@ -228,6 +233,8 @@ class Builder {
                std::vector<uint8_t>& requested);
   void build(PatchTable& out, SparseRefinement& r, PatchStats* stats);
   void set_stats(PatchStats* stats) { stats_ = stats; }
+  /// Region builds: the role of each cage face (see Level::role).
+  void set_roles(std::span<const uint8_t> roles) { roles_ = roles; }
 
  private:
   RingView ring(Level& L, const RefinedLevel& R, uint32_t v) const;
@@ -247,6 +254,7 @@ class Builder {
   const Mesh& cage_;
   PatchOptions o_;
   std::span<const uint8_t> depth_;
+  std::span<const uint8_t> roles_;
   std::vector<Level> levels_;
   uint32_t ptex_count_ = 0;
   PatchHierarchy* h_;
@@ -429,7 +437,7 @@ Ring Builder::span(const Level& L, const RefinedLevel& R, uint32_t corner, bool&
 bool plain_interior(const Level& L, const RefinedLevel& R, uint32_t v) {
   const Topo& t = L.topo;
   if (R.vertex_sharpness[v] != 0.0f || t.vertex_offsets[v + 1] - t.vertex_offsets[v] != 4 ||
-      R.face_offsets.size() != 4 * R.face_count() + 1)
+      !t.quads)
     return false;
   for (uint32_t i = t.vertex_offsets[v]; i < t.vertex_offsets[v + 1]; ++i) {
     const uint32_t c = t.vertex_corners[i], tw = t.corner_twin[c];
@@ -609,6 +617,14 @@ void Builder::request(size_t k, const SparseLevel& S, const LevelAdjacency& adj,
     }
   }
 
+  if (!roles_.empty()) {
+    if (k == 0) {
+      L.role.assign(roles_.begin(), roles_.end());
+    } else {
+      L.role.resize(nf);
+      for (uint32_t f = 0; f < nf; ++f) L.role[f] = levels_[k - 1].role[S.face_parent[f]];
+    }
+  }
   // Irregular corners of covered faces; a face is refined while one of them wants depth.
   L.irregular.assign(nv, 0);
   std::vector<uint8_t> seen(nv, 0);
@@ -647,7 +663,7 @@ void Builder::request(size_t k, const SparseLevel& S, const LevelAdjacency& adj,
         }
     }
     L.force[f] = force;
-    L.requested[f] = (want || force) && k < size_t(kMaxDepth);
+    L.requested[f] = (want || force) && k < size_t(kMaxDepth) && (L.role.empty() || L.role[f]);
     requested[f] = L.requested[f];
   }
   L.level = &R;
@@ -677,7 +693,7 @@ void Builder::request(size_t k, const SparseLevel& S, const LevelAdjacency& adj,
   L.crease_sharpness = {}, L.force = {};
   if (k > 0) {
     Level& P = levels_[k - 1];
-    P.rem = {}, P.requested = {}, P.param = {}, P.src = {}, P.src_offsets = {};
+    P.rem = {}, P.requested = {}, P.param = {}, P.src = {}, P.src_offsets = {}, P.role = {};
   }
 }
 
@@ -899,7 +915,7 @@ void Builder::emit(size_t k, const SparseLevel& S) {
       }
     }
     for (uint32_t f = 0; f < R.face_count(); ++f) {
-      if (!L.owned[f] || (L.requested[f] && !h_)) continue;
+      if (!L.owned[f] || (L.requested[f] && !h_) || (!L.role.empty() && L.role[f] < 2)) continue;
       if (R.face_offsets[f + 1] - R.face_offsets[f] != 4 || L.force[f]) {
         if (h_) continue;  // a node without a patch of its own: always refined
         throw std::logic_error("patches: a non-quad face was left unrefined");
@@ -935,6 +951,9 @@ void Builder::emit(size_t k, const SparseLevel& S) {
         RingView rings[4];
         Ring spans[4];
         int in_ring[4];
+        // Rings are cached in growing arrays: make all four before holding views into them.
+        for (int i = 0; i < 4; ++i)
+          if (!cuts_at_inf_sharp(L, R, a[i])) ring(L, R, a[i]);
         for (int i = 0; i < 4; ++i) {
           if (cuts_at_inf_sharp(L, R, a[i])) {
             // Cut at infinitely sharp edges: the patch sees its span, as a boundary.
@@ -1204,6 +1223,297 @@ PatchTable select_patches(const PatchHierarchy& h, std::span<const uint8_t> vert
   return out;
 }
 
+namespace {
+
+// Region builds (cages of many faces): the cage is cut into regions of about `batch` faces,
+// grown breadth-first so they stay compact, and each region is isolated on its own sub-cage:
+// the region's faces (role 2: their patches are emitted), two rings of faces around them (role
+// 1: refined where they want to be, since the region's patches need their transition bits and
+// the rings those refinements make) and one more ring (role 0: context, never refined for its
+// own sake, so that every vertex of a role-1 face has its whole ring and is classified as in the
+// whole cage). Everything a region's patches use depends only on the faces within one ring of
+// it (the support of a face's limit surface), so the patches and their points equal the whole
+// cage's; the working memory is a region's instead of a whole level's. Each region's pruned
+// table is appended level by level with its ids shifted; the points of a patch are rebased onto
+// the final level offsets once every region is in. Points used by patches of two regions are
+// computed by both (a thin seam).
+constexpr uint32_t kDefaultBatch = 16384;
+constexpr int kTrustedRings = 2, kContextRings = 1;
+
+class RegionBuilder {
+ public:
+  RegionBuilder(const Mesh& cage, const PatchOptions& o, std::span<const uint8_t> depth)
+      : cage_(cage), o_(o), depth_(depth), t_(build_topology(cage)) {
+    const size_t nf = cage.face_count(), nv = cage.vertex_count();
+    edge_sharpness_.assign(t_.edge_count(), 0.0f);
+    const uint32_t* fv = cage.face_vertices.data();
+    for (size_t i = 0; i < cage.crease_sharpness.size(); ++i) {
+      const uint32_t a = cage.crease_edges[2 * i], b = cage.crease_edges[2 * i + 1];
+      uint32_t found = kNone;
+      for (uint32_t k = t_.vertex_offsets[a]; k < t_.vertex_offsets[a + 1]; ++k) {
+        const uint32_t c = t_.vertex_corners[k];
+        if (fv[t_.corner_next[c]] == b) found = t_.corner_edge[c];
+        if (fv[t_.corner_prev[c]] == b) found = t_.corner_edge[t_.corner_prev[c]];
+      }
+      if (found == kNone)
+        throw InputError(
+            fmt::format("crease tag {} names vertices {} and {}, which share no edge", i, a, b));
+      edge_sharpness_[found] = std::min(cage.crease_sharpness[i], kInf);
+    }
+    vertex_sharpness_.assign(nv, 0.0f);
+    for (size_t i = 0; i < cage.corner_vertices.size(); ++i)
+      vertex_sharpness_[cage.corner_vertices[i]] = std::min(cage.corner_sharpness[i], kInf);
+    hole_.assign(nf, 0);
+    for (const uint32_t f : cage.hole_faces) hole_[f] = 1;
+    face_local_.assign(nf, kNone);
+    vertex_local_.assign(nv, kNone);
+    edge_stamp_.assign(t_.edge_count(), kNone);
+    done_.assign(nf, 0);
+    out_.options = o.subdiv;
+    out_.ptex_of_face.assign(1, 0);
+    for (size_t f = 0; f < nf; ++f) {
+      const uint32_t n = cage.face_size(f);
+      out_.ptex_of_face.push_back(out_.ptex_of_face.back() + (n == 4 ? 1 : n));
+    }
+    out_.ptex_count = out_.ptex_of_face.back();
+  }
+
+  PatchTable run(uint32_t batch, PatchStats* stats) {
+    const size_t nf = cage_.face_count();
+    size_t seed = 0, emitted = 0;
+    for (uint32_t region = 0;; ++region) {
+      while (seed < nf && done_[seed]) ++seed;
+      if (seed == nf) break;
+      grow(uint32_t(seed), batch);
+      emitted += region_faces_;
+      build_region(region, stats);
+      if (region == 0) reserve(double(nf) / double(std::max<size_t>(emitted, 1)));
+    }
+    finish(stats);
+    return std::move(out_);
+  }
+
+ private:
+  // The region from `seed` (breadth-first over faces sharing a vertex) and its rings.
+  void grow(uint32_t seed, uint32_t batch) {
+    faces_.clear(), roles_.clear();
+    auto add = [&](uint32_t f, uint8_t role) {
+      face_local_[f] = uint32_t(faces_.size());
+      faces_.push_back(f);
+      roles_.push_back(role);
+    };
+    const uint32_t* fv = cage_.face_vertices.data();
+    auto around = [&](uint32_t f, auto&& visit) {
+      for (uint32_t c = cage_.face_offsets[f]; c < cage_.face_offsets[f + 1]; ++c) {
+        const uint32_t v = fv[c];
+        for (uint32_t k = t_.vertex_offsets[v]; k < t_.vertex_offsets[v + 1]; ++k)
+          visit(t_.corner_face[t_.vertex_corners[k]]);
+      }
+    };
+    add(seed, 2);
+    done_[seed] = 1;
+    for (size_t head = 0; head < faces_.size() && faces_.size() < batch; ++head)
+      around(faces_[head], [&](uint32_t g) {
+        if (faces_.size() < batch && face_local_[g] == kNone && !done_[g]) {
+          add(g, 2);
+          done_[g] = 1;
+        }
+      });
+    region_faces_ = faces_.size();
+    size_t begin = 0;
+    for (int ring = 0; ring < kTrustedRings + kContextRings; ++ring) {
+      const size_t end = faces_.size();
+      const uint8_t role = ring < kTrustedRings ? 1 : 0;
+      for (size_t i = begin; i < end; ++i)
+        around(faces_[i], [&](uint32_t g) {
+          if (face_local_[g] == kNone) add(g, role);
+        });
+      begin = end;
+    }
+  }
+
+  void build_region(uint32_t region, PatchStats* stats) {
+    // The sub-cage: the region's faces and rings over their own vertices, with the cage's tags.
+    Mesh& m = sub_;
+    m = Mesh{};
+    m.tags = cage_.tags;
+    vertices_.clear();
+    const uint32_t* fv = cage_.face_vertices.data();
+    for (const uint32_t f : faces_) {
+      for (uint32_t c = cage_.face_offsets[f]; c < cage_.face_offsets[f + 1]; ++c) {
+        const uint32_t v = fv[c];
+        if (vertex_local_[v] == kNone) {
+          vertex_local_[v] = uint32_t(vertices_.size());
+          vertices_.push_back(v);
+        }
+        m.face_vertices.push_back(vertex_local_[v]);
+      }
+      m.face_offsets.push_back(uint32_t(m.face_vertices.size()));
+      if (hole_[f]) m.hole_faces.push_back(face_local_[f]);
+    }
+    for (const uint32_t f : faces_)  // every vertex has its id now
+      for (uint32_t c = cage_.face_offsets[f]; c < cage_.face_offsets[f + 1]; ++c) {
+        const uint32_t e = t_.corner_edge[c];
+        if (edge_sharpness_[e] > 0.0f && edge_stamp_[e] != region) {
+          edge_stamp_[e] = region;
+          m.crease_edges.insert(m.crease_edges.end(),
+                                {vertex_local_[t_.edge_vertices[2 * size_t(e)]],
+                                 vertex_local_[t_.edge_vertices[2 * size_t(e) + 1]]});
+          m.crease_sharpness.push_back(edge_sharpness_[e]);
+        }
+      }
+    m.positions.resize(3 * vertices_.size());
+    for (size_t i = 0; i < vertices_.size(); ++i) {
+      std::copy_n(&cage_.positions[3 * size_t(vertices_[i])], 3, &m.positions[3 * i]);
+      if (vertex_sharpness_[vertices_[i]] > 0.0f) {
+        m.corner_vertices.push_back(uint32_t(i));
+        m.corner_sharpness.push_back(vertex_sharpness_[vertices_[i]]);
+      }
+    }
+    std::vector<uint8_t> depth;
+    if (!depth_.empty())
+      for (const uint32_t v : vertices_) depth.push_back(depth_[v]);
+
+    PatchStats ps;
+    PatchTable t;
+    {
+      Builder b(m, o_, depth);
+      b.set_roles(roles_);
+      b.set_stats(&ps);
+      SparseRefinement r = isolate(m, o_, b);
+      b.build(t, r, &ps);
+    }
+    merge(t, stats, ps);
+    for (const uint32_t f : faces_) face_local_[f] = kNone;
+    for (const uint32_t v : vertices_) vertex_local_[v] = kNone;
+  }
+
+  // Appends a region's table: level-k rows after the earlier regions' (ids shifted by their
+  // counts), patch points as ids within their level (rebased in finish()).
+  void merge(const PatchTable& t, PatchStats* stats, const PatchStats& ps) {
+    const size_t nl = t.level_offsets.size() - 1;
+    if (out_.level_stencils.size() < nl - 1) out_.level_stencils.resize(nl - 1);
+    if (count_.size() < nl) count_.resize(nl, 0);
+    const std::vector<uint32_t> base(count_);  // this region's first id in each level
+    for (size_t k = 1; k < nl; ++k) {
+      const StencilTable& src = t.level_stencils[k - 1];
+      StencilTable& dst = out_.level_stencils[k - 1];
+      const uint32_t shift = uint32_t(dst.indices.size());
+      for (size_t i = 1; i < src.offsets.size(); ++i) dst.offsets.push_back(shift + src.offsets[i]);
+      if (k == 1) {
+        for (const uint32_t p : src.indices) dst.indices.push_back(vertices_[p]);
+      } else {
+        for (const uint32_t p : src.indices) dst.indices.push_back(base[k - 1] + p);
+      }
+      dst.weights.insert(dst.weights.end(), src.weights.begin(), src.weights.end());
+      count_[k] += uint32_t(src.size());
+    }
+    // A level-k patch's points are all level-k points.
+    auto local = [&](uint32_t p, uint32_t k) {
+      if (p < t.level_offsets[k] || p >= t.level_offsets[k + 1])
+        throw std::logic_error("patches: a region's patch reads another level");
+      return k == 0 ? vertices_[p] : base[k] + (p - t.level_offsets[k]);
+    };
+    auto place = [&](PatchParam pp) {
+      const uint32_t f = faces_[pp.base_face];
+      pp.ptex = out_.ptex_of_face[f] + (pp.ptex - t.ptex_of_face[pp.base_face]);
+      pp.base_face = f;
+      return pp;
+    };
+    for (size_t i = 0; i < t.regular_params.size(); ++i) {
+      const PatchParam& pp = t.regular_params[i];
+      for (size_t j = 16 * i; j < 16 * i + 16; ++j)
+        out_.regular_points.push_back(local(t.regular_points[j], pp.level));
+      out_.regular_params.push_back(place(pp));
+    }
+    const uint32_t cap_base = t.level_offsets.back();
+    const uint32_t cap_shift = uint32_t(out_.gregory_stencils.size());
+    for (size_t i = 0; i < t.gregory_params.size(); ++i) {
+      for (size_t j = 20 * i; j < 20 * i + 20; ++j) {
+        const uint32_t row = t.gregory_points[j] - cap_base;
+        if (row / 20 != i) throw std::logic_error("patches: an end cap reads another's points");
+        out_.gregory_points.push_back(cap_shift + row);
+      }
+      out_.gregory_params.push_back(place(t.gregory_params[i]));
+    }
+    const StencilTable& g = t.gregory_stencils;
+    StencilTable& dg = out_.gregory_stencils;
+    const uint32_t shift = uint32_t(dg.indices.size());
+    for (size_t r = 0; r < g.size(); ++r) {
+      const uint32_t k = t.gregory_params[r / 20].level;
+      for (uint32_t j = g.offsets[r]; j < g.offsets[r + 1]; ++j)
+        dg.indices.push_back(local(g.indices[j], k));
+      dg.offsets.push_back(shift + g.offsets[r + 1]);
+    }
+    dg.weights.insert(dg.weights.end(), g.weights.begin(), g.weights.end());
+    if (stats) {
+      for (auto [to, from] : {std::pair{&stats->regular_by_level, &ps.regular_by_level},
+                              std::pair{&stats->gregory_by_level, &ps.gregory_by_level}}) {
+        if (to->size() < from->size()) to->resize(from->size(), 0);
+        for (size_t k = 0; k < from->size(); ++k) (*to)[k] += (*from)[k];
+      }
+      stats->patches_ms += ps.patches_ms;
+    }
+  }
+
+  // After the first region: room for the rest at its rate, so the big arrays grow once.
+  void reserve(double scale) {
+    const double s = scale * 1.1;
+    auto grow = [&](auto& v) { v.reserve(size_t(double(v.size()) * s)); };
+    for (StencilTable& st : out_.level_stencils)
+      grow(st.offsets), grow(st.indices), grow(st.weights);
+    grow(out_.gregory_stencils.offsets), grow(out_.gregory_stencils.indices);
+    grow(out_.gregory_stencils.weights);
+    grow(out_.regular_points), grow(out_.regular_params);
+    grow(out_.gregory_points), grow(out_.gregory_params);
+  }
+
+  void finish(PatchStats* stats) {
+    PatchTable& t = out_;
+    t.level_offsets.assign(1, 0);
+    t.level_offsets.push_back(uint32_t(cage_.vertex_count()));
+    for (size_t k = 1; k < count_.size(); ++k) {
+      if (uint64_t(t.level_offsets.back()) + count_[k] >= kNone)
+        throw InputError("patches: more than 2^32 points");
+      t.level_offsets.push_back(t.level_offsets.back() + count_[k]);
+    }
+    for (size_t i = 0; i < t.regular_params.size(); ++i) {
+      const uint32_t shift = t.level_offsets[t.regular_params[i].level];
+      if (t.regular_params[i].level > 0)
+        for (size_t j = 16 * i; j < 16 * i + 16; ++j) t.regular_points[j] += shift;
+    }
+    const uint32_t caps = t.level_offsets.back();
+    for (uint32_t& p : t.gregory_points) p += caps;
+    StencilTable& g = t.gregory_stencils;
+    for (size_t r = 0; r < g.size(); ++r) {
+      const uint32_t k = t.gregory_params[r / 20].level;
+      if (k > 0)
+        for (uint32_t j = g.offsets[r]; j < g.offsets[r + 1]; ++j)
+          g.indices[j] += t.level_offsets[k];
+    }
+    if (stats) {
+      stats->regular_by_level.resize(t.level_offsets.size() - 1, 0);
+      stats->gregory_by_level.resize(t.level_offsets.size() - 1, 0);
+      stats->points = t.point_count();
+    }
+  }
+
+  const Mesh& cage_;
+  PatchOptions o_;
+  std::span<const uint8_t> depth_;
+  Topology t_;
+  std::vector<float> edge_sharpness_, vertex_sharpness_;
+  std::vector<uint8_t> hole_, done_;
+  std::vector<uint32_t> face_local_, vertex_local_, edge_stamp_;
+  std::vector<uint32_t> faces_, vertices_, count_{0};
+  std::vector<uint8_t> roles_;
+  size_t region_faces_ = 0;
+  Mesh sub_;
+  PatchTable out_;
+};
+
+}  // namespace
+
 PatchTable build_patches(const Mesh& cage, const PatchOptions& options,
                          std::span<const uint8_t> vertex_depth, PatchStats* stats) {
   check_depth(options);
@@ -1212,6 +1522,15 @@ PatchTable build_patches(const Mesh& cage, const PatchOptions& options,
                                  cage.vertex_count()));
   const auto t0 = std::chrono::steady_clock::now();
   if (stats) *stats = {};
+  const size_t nf = cage.face_count();
+  const uint32_t batch = options.batch_faces ? options.batch_faces : kDefaultBatch;
+  if (options.batch_faces ? nf > batch : nf > 2 * size_t(batch)) {
+    validate(cage, "cage");
+    RegionBuilder rb(cage, options, vertex_depth);
+    PatchTable out = rb.run(batch, stats);
+    if (stats) stats->refine_ms = ms_since(t0) - stats->patches_ms;
+    return out;
+  }
   Builder b(cage, options, vertex_depth);
   b.set_stats(stats);
   SparseRefinement r = isolate(cage, options, b);

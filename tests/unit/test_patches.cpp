@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <string>
 #include <tuple>
 
@@ -337,6 +338,95 @@ TEST(Patches, SharedCagesMatchOpenSubdiv) {
 
 namespace limn {
 namespace {
+
+// Region builds (cages cut into regions isolated one at a time): the same patches, with the
+// same placement, type, boundary and transition bits, and the same surface as the whole-cage
+// build, for regions down to a single face, where every patch lies on a region border.
+void expect_regions_equal_whole(const Mesh& cage, const PatchOptions& base,
+                                std::span<const uint8_t> vertex_depth, const std::string& name) {
+  PatchOptions whole = base;
+  whole.batch_faces = 0xFFFFFFFFu;
+  const PatchTable a = build_patches(cage, whole, vertex_depth);
+  const std::vector<float> pa = a.points(cage.positions);
+  const double diag = bbox_diagonal(cage);
+  using Key = std::tuple<uint32_t, uint16_t, uint16_t, uint8_t, uint8_t, uint8_t, uint8_t, uint8_t,
+                         float, uint32_t>;
+  auto keys = [](const PatchTable& t) {
+    std::map<Key, uint32_t> k;
+    const size_t nr = t.regular_params.size();
+    for (uint32_t i = 0; i < t.patch_count(); ++i) {
+      const PatchParam& p = i < nr ? t.regular_params[i] : t.gregory_params[i - nr];
+      k.emplace(Key{p.ptex, p.u, p.v, p.depth, uint8_t(p.type), p.boundary, p.transition,
+                    p.crease_edge, p.sharpness, p.base_face},
+                i);
+    }
+    return k;
+  };
+  const auto ka = keys(a);
+  EXPECT_EQ(ka.size(), a.patch_count()) << name;  // no two patches in one place
+  for (const uint32_t batch : {1u, 5u, 23u}) {
+    PatchOptions o = base;
+    o.batch_faces = batch;
+    const PatchTable b = build_patches(cage, o, vertex_depth);
+    EXPECT_EQ(b.ptex_count, a.ptex_count) << name;
+    EXPECT_EQ(b.ptex_of_face, a.ptex_of_face) << name;
+    const auto kb = keys(b);
+    ASSERT_EQ(kb.size(), ka.size()) << name << " regions of " << batch;
+    const std::vector<float> pb = b.points(cage.positions);
+    std::vector<PatchCoord> ca, cb;
+    for (const auto& [key, i] : ka) {
+      const auto it = kb.find(key);
+      ASSERT_NE(it, kb.end()) << name << " regions of " << batch << ": ptex " << std::get<0>(key)
+                              << " has no matching patch";
+      for (const float s : {0.0f, 0.4f, 1.0f})
+        for (const float t : {0.0f, 0.7f, 1.0f}) {
+          ca.push_back({i, s, t});
+          cb.push_back({it->second, s, t});
+        }
+    }
+    std::vector<float> xa(3 * ca.size()), xb(3 * cb.size());
+    evaluate_patches(a, pa, ca, xa.data());
+    evaluate_patches(b, pb, cb, xb.data());
+    double worst = 0;
+    for (size_t i = 0; i < xa.size(); ++i) worst = std::max(worst, double(std::abs(xa[i] - xb[i])));
+    EXPECT_LE(worst, 1e-6 * diag) << name << " regions of " << batch;
+  }
+}
+
+TEST(Patches, RegionBuildsEqualTheWholeCage) {
+  for (const auto& path : test::shared_cages(LIMN_SHARED_MODELS)) {
+    const Mesh cage = read_mesh(path.string());
+    PatchOptions o;
+    o.subdiv = subdiv_options(cage);
+    o.depth = 3;
+    expect_regions_equal_whole(cage, o, {}, path.filename().string());
+  }
+  // Random cages: n-gons, holes, semi-sharp creases and corners, every boundary rule, with and
+  // without the special patches, and per-vertex depths.
+  for (int i = 0; i < 12; ++i) {
+    const Mesh cage = test::random_cage(20261202 + uint64_t(i));
+    PatchOptions o;
+    o.subdiv.boundary =
+        i % 3 == 0 ? BoundaryInterpolation::edge_only : BoundaryInterpolation::edge_and_corner;
+    if (i % 5 == 0) o.subdiv.boundary = BoundaryInterpolation::none;
+    o.subdiv.crease_method = i % 2 ? CreaseMethod::chaikin : CreaseMethod::uniform;
+    o.inf_sharp_patches = o.single_crease_patches = i % 4 < 2;
+    o.depth = 2 + i % 3;
+    std::vector<uint8_t> depth;
+    if (i % 3 == 1) {
+      test::Rng rng{uint64_t(i)};
+      for (size_t v = 0; v < cage.vertex_count(); ++v) depth.push_back(uint8_t(rng.below(5)));
+    }
+    try {
+      expect_regions_equal_whole(cage, o, depth, "random cage " + std::to_string(i));
+    } catch (const InputError&) {
+      // a cage limn rejects (checked elsewhere); both paths must reject it alike
+      PatchOptions r = o;
+      r.batch_faces = 3;
+      EXPECT_THROW(build_patches(cage, r, depth), InputError);
+    }
+  }
+}
 
 // Per-vertex depths: the patches tile every ptex face exactly once (PatchMap rejects overlaps and
 // finds a patch everywhere), regular patches are the exact limit surface (they agree with the

@@ -62,6 +62,11 @@ struct PatchOptions {
   /// through its 4 x 4 points) becomes one exact single-crease patch instead of being isolated
   /// until the sharpness decays (OpenSubdiv's useSingleCreasePatch).
   bool single_crease_patches = true;
+  /// Cages of more faces are isolated region by region, each region about this many faces with
+  /// its neighbourhood (0: regions of 16384 faces, for cages of more than 32768): the working
+  /// memory is a region's, not a whole level's. The patches are the same; points that patches
+  /// on both sides of a region border use are stored once per region.
+  uint32_t batch_faces = 0;
 };
 
 /// Counts and timings of one build.
