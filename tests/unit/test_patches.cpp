@@ -507,6 +507,30 @@ TEST(Patches, DepthZeroNextToNonQuads) {
   }
 }
 
+// A cage whose n-gons balance to four corners per face (a triangle and a pentagon among quads)
+// is still told from an all-quad cage: corner c is not corner c % 4 of face c / 4 there.
+TEST(Patches, BalancedNonQuadsMatchOpenSubdiv) {
+  Mesh cage;
+  for (int y = 0; y < 6; ++y)
+    for (int x = 0; x < 6; ++x)
+      cage.add_vertex(float(x), float(y), 0.2f * std::sin(float(x * 3 + y * 5)));
+  auto id = [](int x, int y) { return uint32_t(6 * y + x); };
+  // The two quads (1..3, 2..3) as a triangle and a pentagon split along a diagonal, first and
+  // last, so that every quad's corners sit one off from 4f.
+  cage.add_face({id(1, 2), id(2, 2), id(1, 3)});
+  for (int y = 0; y < 5; ++y)
+    for (int x = 0; x < 5; ++x) {
+      if (y == 2 && (x == 1 || x == 2)) continue;
+      cage.add_face({id(x, y), id(x + 1, y), id(x + 1, y + 1), id(x, y + 1)});
+    }
+  cage.add_face({id(2, 2), id(3, 2), id(3, 3), id(2, 3), id(1, 3)});
+  ASSERT_EQ(cage.corner_count(), 4 * cage.face_count());
+  for (const int depth : {1, 2, 3}) {
+    const Comparison c = compare_with_osd(cage, depth, subdiv_options(cage));
+    EXPECT_LT(c.max_position, 1e-5) << "depth " << depth << " " << c.worst;
+  }
+}
+
 }  // namespace
 }  // namespace limn
 
