@@ -14,6 +14,7 @@
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
+#include <unordered_map>
 #include <utility>
 
 #include "limn/mesh/topology.hpp"
@@ -1243,22 +1244,38 @@ constexpr int kTrustedRings = 2, kContextRings = 1;
 class RegionBuilder {
  public:
   RegionBuilder(const Mesh& cage, const PatchOptions& o, std::span<const uint8_t> depth)
-      : cage_(cage), o_(o), depth_(depth), t_(build_topology(cage)) {
-    const size_t nf = cage.face_count(), nv = cage.vertex_count();
-    edge_sharpness_.assign(t_.edge_count(), 0.0f);
-    const uint32_t* fv = cage.face_vertices.data();
+      : cage_(cage), o_(o), depth_(depth) {
+    const size_t nf = cage.face_count(), nv = cage.vertex_count(), nc = cage.corner_count();
+    // Faces around each vertex (all the regions need of the cage's topology: 8 bytes a corner).
+    vertex_face_offsets_.assign(nv + 1, 0);
+    for (const uint32_t v : cage.face_vertices) ++vertex_face_offsets_[v + 1];
+    for (size_t v = 0; v < nv; ++v) vertex_face_offsets_[v + 1] += vertex_face_offsets_[v];
+    vertex_faces_.resize(nc);
+    {
+      std::vector<uint32_t> fill(vertex_face_offsets_.begin(), vertex_face_offsets_.end() - 1);
+      for (uint32_t f = 0; f < nf; ++f)
+        for (const uint32_t v : cage.face(f)) vertex_faces_[fill[v]++] = f;
+    }
+    // Crease tags by edge; each must be an edge of some face, as in the whole-cage build.
     for (size_t i = 0; i < cage.crease_sharpness.size(); ++i) {
       const uint32_t a = cage.crease_edges[2 * i], b = cage.crease_edges[2 * i + 1];
-      uint32_t found = kNone;
-      for (uint32_t k = t_.vertex_offsets[a]; k < t_.vertex_offsets[a + 1]; ++k) {
-        const uint32_t c = t_.vertex_corners[k];
-        if (fv[t_.corner_next[c]] == b) found = t_.corner_edge[c];
-        if (fv[t_.corner_prev[c]] == b) found = t_.corner_edge[t_.corner_prev[c]];
+      Crease& c = creases_[edge_key(a, b)];
+      c.sharpness = std::min(cage.crease_sharpness[i], kInf);  // a later tag wins
+    }
+    if (!creases_.empty()) {
+      for (uint32_t f = 0; f < nf; ++f) {
+        const std::span<const uint32_t> vs = cage.face(f);
+        for (size_t j = 0; j < vs.size(); ++j)
+          if (const auto it = creases_.find(edge_key(vs[j], vs[(j + 1) % vs.size()]));
+              it != creases_.end())
+            it->second.on_face = true;
       }
-      if (found == kNone)
-        throw InputError(
-            fmt::format("crease tag {} names vertices {} and {}, which share no edge", i, a, b));
-      edge_sharpness_[found] = std::min(cage.crease_sharpness[i], kInf);
+      for (size_t i = 0; i < cage.crease_sharpness.size(); ++i) {
+        const uint32_t a = cage.crease_edges[2 * i], b = cage.crease_edges[2 * i + 1];
+        if (!creases_[edge_key(a, b)].on_face)
+          throw InputError(
+              fmt::format("crease tag {} names vertices {} and {}, which share no edge", i, a, b));
+      }
     }
     vertex_sharpness_.assign(nv, 0.0f);
     for (size_t i = 0; i < cage.corner_vertices.size(); ++i)
@@ -1267,7 +1284,6 @@ class RegionBuilder {
     for (const uint32_t f : cage.hole_faces) hole_[f] = 1;
     face_local_.assign(nf, kNone);
     vertex_local_.assign(nv, kNone);
-    edge_stamp_.assign(t_.edge_count(), kNone);
     done_.assign(nf, 0);
     out_.options = o.subdiv;
     out_.ptex_of_face.assign(1, 0);
@@ -1306,8 +1322,8 @@ class RegionBuilder {
     auto around = [&](uint32_t f, auto&& visit) {
       for (uint32_t c = cage_.face_offsets[f]; c < cage_.face_offsets[f + 1]; ++c) {
         const uint32_t v = fv[c];
-        for (uint32_t k = t_.vertex_offsets[v]; k < t_.vertex_offsets[v + 1]; ++k)
-          visit(t_.corner_face[t_.vertex_corners[k]]);
+        for (uint32_t k = vertex_face_offsets_[v]; k < vertex_face_offsets_[v + 1]; ++k)
+          visit(vertex_faces_[k]);
       }
     };
     add(seed, 2);
@@ -1351,15 +1367,16 @@ class RegionBuilder {
       m.face_offsets.push_back(uint32_t(m.face_vertices.size()));
       if (hole_[f]) m.hole_faces.push_back(face_local_[f]);
     }
-    for (const uint32_t f : faces_)  // every vertex has its id now
-      for (uint32_t c = cage_.face_offsets[f]; c < cage_.face_offsets[f + 1]; ++c) {
-        const uint32_t e = t_.corner_edge[c];
-        if (edge_sharpness_[e] > 0.0f && edge_stamp_[e] != region) {
-          edge_stamp_[e] = region;
-          m.crease_edges.insert(m.crease_edges.end(),
-                                {vertex_local_[t_.edge_vertices[2 * size_t(e)]],
-                                 vertex_local_[t_.edge_vertices[2 * size_t(e) + 1]]});
-          m.crease_sharpness.push_back(edge_sharpness_[e]);
+    if (!creases_.empty())
+      for (const uint32_t f : faces_) {  // every vertex has its id now
+        const std::span<const uint32_t> vs = cage_.face(f);
+        for (size_t j = 0; j < vs.size(); ++j) {
+          const uint32_t a = vs[j], b = vs[(j + 1) % vs.size()];
+          const auto it = creases_.find(edge_key(a, b));
+          if (it == creases_.end() || it->second.region == region) continue;
+          it->second.region = region;
+          m.crease_edges.insert(m.crease_edges.end(), {vertex_local_[a], vertex_local_[b]});
+          m.crease_sharpness.push_back(it->second.sharpness);
         }
       }
     m.positions.resize(3 * vertices_.size());
@@ -1498,13 +1515,23 @@ class RegionBuilder {
     }
   }
 
+  static uint64_t edge_key(uint32_t a, uint32_t b) {
+    return a < b ? uint64_t(a) << 32 | b : uint64_t(b) << 32 | a;
+  }
+  struct Crease {
+    float sharpness = 0;
+    uint32_t region = kNone;  // the last region that took it
+    bool on_face = false;
+  };
+
   const Mesh& cage_;
   PatchOptions o_;
   std::span<const uint8_t> depth_;
-  Topology t_;
-  std::vector<float> edge_sharpness_, vertex_sharpness_;
+  std::vector<uint32_t> vertex_face_offsets_, vertex_faces_;
+  std::unordered_map<uint64_t, Crease> creases_;
+  std::vector<float> vertex_sharpness_;
   std::vector<uint8_t> hole_, done_;
-  std::vector<uint32_t> face_local_, vertex_local_, edge_stamp_;
+  std::vector<uint32_t> face_local_, vertex_local_;
   std::vector<uint32_t> faces_, vertices_, count_{0};
   std::vector<uint8_t> roles_;
   size_t region_faces_ = 0;

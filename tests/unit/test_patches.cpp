@@ -401,6 +401,15 @@ TEST(Patches, RegionBuildsEqualTheWholeCage) {
     o.depth = 3;
     expect_regions_equal_whole(cage, o, {}, path.filename().string());
   }
+  // A crease tag between vertices that share no edge is refused by both.
+  Mesh bad = make_shape("torus");
+  bad.crease_edges = {0, 2};
+  bad.crease_sharpness = {1.0f};
+  for (const uint32_t batch : {0xFFFFFFFFu, 4u}) {
+    PatchOptions o;
+    o.batch_faces = batch;
+    EXPECT_THROW(build_patches(bad, o), InputError) << batch;
+  }
   // Random cages: n-gons, holes, semi-sharp creases and corners, every boundary rule, with and
   // without the special patches, and per-vertex depths.
   for (int i = 0; i < 12; ++i) {
