@@ -31,27 +31,36 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
 }
 
 // A linear combination of an end cap's points: dense over the cap's support (the sorted ids of
-// its four corners and their rings), so adding terms is indexing, combining rows is a dense
-// axpy, and emitting walks the support in id order with no sorting.
+// its four corners and their rings), so adding a term is two lookups (the point's slot in the
+// support, from a map by point id), combining rows is a dense axpy, and emitting walks the
+// support in id order with no sorting.
 struct Terms {
   const std::vector<uint32_t>* ids = nullptr;
+  const uint32_t* slot = nullptr;  // slot[p - base]: p's place in ids (valid for ids only)
+  uint32_t base = 0, span = 0;
   std::vector<double> w;
-  void reset(const std::vector<uint32_t>& support) {
-    ids = &support;
+  void reset(const std::vector<uint32_t>& support, const uint32_t* slots, uint32_t first,
+             uint32_t count) {
+    ids = &support, slot = slots, base = first, span = count;
     w.assign(support.size(), 0.0);
   }
   void add(uint32_t p, double x) {
-    const auto it = std::lower_bound(ids->begin(), ids->end(), p);
-    if (it == ids->end() || *it != p) throw std::logic_error("patches: end-cap point off support");
-    w[size_t(it - ids->begin())] += x;
+    const uint32_t s = p - base < span ? slot[p - base] : kNone;
+    if (s >= ids->size() || (*ids)[s] != p)
+      throw std::logic_error("patches: end-cap point off support");
+    w[s] += x;
   }
   void add(const Terms& o, double s) {
     for (size_t i = 0; i < w.size(); ++i) w[i] += o.w[i] * s;
   }
-  void emit(StencilTable& table) const {
-    for (size_t i = 0; i < w.size(); ++i)
-      if (w[i] != 0.0) table.indices.push_back((*ids)[i]), table.weights.push_back(float(w[i]));
-    table.offsets.push_back(uint32_t(table.indices.size()));
+  // The row's non-zero terms at `at` (room for the whole support); returns how many.
+  size_t emit(uint32_t* idx, float* weight) const {
+    size_t n = 0;
+    for (size_t i = 0; i < w.size(); ++i) {
+      idx[n] = (*ids)[i], weight[n] = float(w[i]);
+      n += w[i] != 0.0;
+    }
+    return n;
   }
 };
 
@@ -204,6 +213,7 @@ class GregoryCap {
   Corner c[4];
   Terms p[4], ep[4], em[4], fp[4], fm[4];
   std::vector<uint32_t> support;  // sorted ids of the corners and their rings
+  std::vector<uint32_t> slots;    // by point id - first: place in support (its entries only)
 
   // Ready for another patch, keeping the buffers.
   void reset() {
@@ -214,7 +224,9 @@ class GregoryCap {
       c[i].ring = std::move(ring);
     }
   }
-  void finish_topology();
+  // `first`, `count`: the range of point ids the corners and rings lie in (one level's).
+  void finish_topology(uint32_t first, uint32_t count);
+  void emit_rows(StencilTable& table) const;
   void compute();
 
  private:
@@ -698,7 +710,7 @@ void Builder::request(size_t k, const SparseLevel& S, const LevelAdjacency& adj,
   }
 }
 
-void GregoryCap::finish_topology() {
+void GregoryCap::finish_topology(uint32_t first, uint32_t count) {
   support.clear();
   for (const Corner& k : c) {
     support.push_back(k.v);
@@ -706,8 +718,14 @@ void GregoryCap::finish_topology() {
   }
   std::sort(support.begin(), support.end());
   support.erase(std::unique(support.begin(), support.end()), support.end());
+  if (slots.size() < count) slots.resize(count);
+  for (size_t i = 0; i < support.size(); ++i) {
+    if (support[i] - first >= count) throw std::logic_error("patches: end-cap point off level");
+    slots[support[i] - first] = uint32_t(i);
+  }
   for (int i = 0; i < 4; ++i)
-    for (Terms* t : {&p[i], &ep[i], &em[i], &fp[i], &fm[i]}) t->reset(support);
+    for (Terms* t : {&p[i], &ep[i], &em[i], &fp[i], &fm[i]})
+      t->reset(support, slots.data(), first, count);
   const double pi = std::numbers::pi;
   for (Corner& k : c) {
     k.valence = k.faces + (k.boundary ? 1 : 0);
@@ -862,6 +880,22 @@ void GregoryCap::face_points(int i) {
     irregular_face_point(i, (k.face_in_ring + 1) % k.valence, prev, em[i], ep[prev], -1.0, fm[i]);
   if (k.fp_copied) fp[i] = fm[i];
   if (k.fm_copied) fm[i] = fp[i];
+}
+
+// The 20 rows in point order (corner i: P, Ep, Em, Fp, Fm), written in place: the arrays grow
+// once per cap and shrink back to the terms kept.
+void GregoryCap::emit_rows(StencilTable& table) const {
+  const size_t at = table.indices.size(), room = 20 * support.size();
+  table.indices.resize(at + room);
+  table.weights.resize(at + room);
+  size_t n = at;
+  for (int i = 0; i < 4; ++i)
+    for (const Terms* row : {&p[i], &ep[i], &em[i], &fp[i], &fm[i]}) {
+      n += row->emit(table.indices.data() + n, table.weights.data() + n);
+      table.offsets.push_back(uint32_t(n));
+    }
+  table.indices.resize(n);
+  table.weights.resize(n);
 }
 
 void GregoryCap::compute() {
@@ -1032,12 +1066,10 @@ void Builder::emit(size_t k, const SparseLevel& S) {
             cc.ring.push_back(off + g.edge_end[m]), cc.ring.push_back(off + g.diagonal[m]);
           if (g.boundary) cc.ring.push_back(off + g.edge_end.back());
         }
-        cap.finish_topology();
+        cap.finish_topology(off, uint32_t(R.vertex_count()));
         cap.compute();
         const uint32_t first = uint32_t(out.gregory_stencils.size());
-        for (int i = 0; i < 4; ++i)
-          for (Terms* row : {&cap.p[i], &cap.ep[i], &cap.em[i], &cap.fp[i], &cap.fm[i]})
-            row->emit(out.gregory_stencils);
+        cap.emit_rows(out.gregory_stencils);
         for (uint32_t q = 0; q < 20; ++q) out.gregory_points.push_back(first + q);
         out.gregory_params.push_back(pp);
         if (stats) ++stats->gregory_by_level[k];
