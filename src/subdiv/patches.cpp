@@ -214,6 +214,8 @@ class GregoryCap {
   Terms p[4], ep[4], em[4], fp[4], fm[4];
   std::vector<uint32_t> support;  // sorted ids of the corners and their rings
   std::vector<uint32_t> slots;    // by point id - first: place in support (its entries only)
+  std::vector<uint32_t> row_idx;  // emit_rows' scratch: the rows' terms before they are copied
+  std::vector<float> row_w;
 
   // Ready for another patch, keeping the buffers.
   void reset() {
@@ -226,7 +228,7 @@ class GregoryCap {
   }
   // `first`, `count`: the range of point ids the corners and rings lie in (one level's).
   void finish_topology(uint32_t first, uint32_t count);
-  void emit_rows(StencilTable& table) const;
+  void emit_rows(StencilTable& table);
   void compute();
 
  private:
@@ -884,18 +886,18 @@ void GregoryCap::face_points(int i) {
 
 // The 20 rows in point order (corner i: P, Ep, Em, Fp, Fm), written in place: the arrays grow
 // once per cap and shrink back to the terms kept.
-void GregoryCap::emit_rows(StencilTable& table) const {
-  const size_t at = table.indices.size(), room = 20 * support.size();
-  table.indices.resize(at + room);
-  table.weights.resize(at + room);
-  size_t n = at;
+void GregoryCap::emit_rows(StencilTable& table) {
+  const size_t room = 20 * support.size();
+  if (row_idx.size() < room) row_idx.resize(room), row_w.resize(room);
+  const size_t at = table.indices.size();
+  size_t n = 0;
   for (int i = 0; i < 4; ++i)
     for (const Terms* row : {&p[i], &ep[i], &em[i], &fp[i], &fm[i]}) {
-      n += row->emit(table.indices.data() + n, table.weights.data() + n);
-      table.offsets.push_back(uint32_t(n));
+      n += row->emit(row_idx.data() + n, row_w.data() + n);
+      table.offsets.push_back(uint32_t(at + n));
     }
-  table.indices.resize(n);
-  table.weights.resize(n);
+  table.indices.insert(table.indices.end(), row_idx.begin(), row_idx.begin() + long(n));
+  table.weights.insert(table.weights.end(), row_w.begin(), row_w.begin() + long(n));
 }
 
 void GregoryCap::compute() {

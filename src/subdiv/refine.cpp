@@ -854,6 +854,93 @@ void selected_child_faces(const RefinedLevel& P, const Adj& pa, const Selection&
   }
 }
 
+// The adjacency of a sparse child (faces from selected_child_faces) in closed form, like
+// derive_child's for uniform levels: no search and no sort. Child quad q of parent corner c has
+// corners V(c), E(c's edge), F, E(prev's edge). Its edges: two per selected parent edge ei
+// (2 ei + 0/1: edge point to the vertex point of the edge's first/second end) and one per child
+// quad (2 E + q: the edge point of its corner's edge to the face point). A child edge has one
+// corner per selected parent face that makes it, so an edge whose parent lies on an unrefined
+// face is a boundary of the child level, as build_adj would find. Sets C.edge_vertices.
+Adj sparse_child_adj(const RefinedLevel& P, const Adj& pa, const Selection& sel, RefinedLevel& C) {
+  const LevelRef pl{P, pa};
+  const uint32_t F = sel.nf, E = sel.ne, V = sel.nv;
+  const uint32_t Q = uint32_t(C.face_count()), nvc = F + E + V;
+  const uint32_t* pfv = P.face_vertices.data();
+  Adj a;
+  a.quads = true;
+  // Parent face -> the first child quad of its selected index.
+  std::vector<uint32_t> first_quad(P.face_count(), kNone);
+  for (uint32_t fi = 0, q = 0; fi < F; ++fi) {
+    const uint32_t f = sel.face(fi);
+    first_quad[f] = q;
+    q += P.face_offsets[f + 1] - P.face_offsets[f];
+  }
+  auto quad_of = [&](uint32_t c) {  // c a corner of a selected parent face
+    const uint32_t f = pa.face_of(c);
+    return first_quad[f] + (c - P.face_offsets[f]);
+  };
+  const uint32_t ne = 2 * E + Q;
+  C.edge_vertices.resize(2 * size_t(ne));
+  a.corner_edge.assign(4 * size_t(Q), kNone);
+  a.eco.assign(size_t(ne) + 1, 0);
+  // Corners per edge: each type-A edge has two; type-B edges one per selected face on the
+  // parent edge.
+  for (uint32_t ei = 0; ei < E; ++ei) {
+    const uint32_t e = sel.edge(ei);
+    uint32_t n = 0;
+    for (uint32_t j = pa.eco[e]; j < pa.eco[e + 1]; ++j)
+      n += first_quad[pa.face_of(pa.ec[j])] != kNone;
+    a.eco[2 * ei + 1] = a.eco[2 * ei + 2] = n;
+    const uint32_t x = P.edge_vertices[2 * size_t(e)], y = P.edge_vertices[2 * size_t(e) + 1];
+    C.edge_vertices[4 * size_t(ei)] = F + ei,
+                        C.edge_vertices[4 * size_t(ei) + 1] = F + E + sel.vslot(x);
+    C.edge_vertices[4 * size_t(ei) + 2] = F + ei,
+                                     C.edge_vertices[4 * size_t(ei) + 3] = F + E + sel.vslot(y);
+  }
+  for (uint32_t q = 0; q < Q; ++q) a.eco[2 * size_t(E) + q + 1] = 2;
+  for (size_t e = 0; e < ne; ++e) a.eco[e + 1] += a.eco[e];
+  a.ec.resize(a.eco.back());
+  std::vector<uint32_t> fill(a.eco.begin(), a.eco.end() - 1);
+  auto put = [&](uint32_t e, uint32_t corner) {
+    a.corner_edge[corner] = e;
+    a.ec[fill[e]++] = corner;
+  };
+  for (uint32_t fi = 0; fi < F; ++fi) {
+    const uint32_t f = sel.face(fi);
+    for (uint32_t c = P.face_offsets[f]; c < P.face_offsets[f + 1]; ++c) {
+      const uint32_t q = quad_of(c), qn = quad_of(pl.next(c)), ei = sel.eslot(pa.corner_edge[c]);
+      const uint32_t e = 2 * E + q;
+      C.edge_vertices[2 * size_t(e)] = fi, C.edge_vertices[2 * size_t(e) + 1] = F + ei;
+      put(e, 4 * q + 1);   // E(c) -> F in quad q
+      put(e, 4 * qn + 2);  // F -> E(c) in the next corner's quad
+      // V(start) -> E(c) in quad q, E(c) -> V(end) in quad qn: the halves of the parent edge.
+      const uint32_t pe = pa.corner_edge[c];
+      const bool start_first = P.edge_vertices[2 * size_t(pe)] == pfv[c];
+      put(2 * ei + (start_first ? 0 : 1), 4 * q);
+      put(2 * ei + (start_first ? 1 : 0), 4 * qn + 3);
+    }
+  }
+  // Vertex -> corners and vertex -> edges, by counting.
+  const uint32_t* cfv = C.face_vertices.data();
+  a.vco.assign(size_t(nvc) + 1, 0);
+  for (size_t c = 0; c < 4 * size_t(Q); ++c) ++a.vco[cfv[c] + 1];
+  for (size_t v = 0; v < nvc; ++v) a.vco[v + 1] += a.vco[v];
+  a.vc.resize(4 * size_t(Q));
+  fill.assign(a.vco.begin(), a.vco.end() - 1);
+  for (uint32_t c = 0; c < 4 * Q; ++c) a.vc[fill[cfv[c]]++] = c;
+  a.veo.assign(size_t(nvc) + 1, 0);
+  for (size_t e = 0; e < ne; ++e)
+    ++a.veo[C.edge_vertices[2 * e] + 1], ++a.veo[C.edge_vertices[2 * e + 1] + 1];
+  for (size_t v = 0; v < nvc; ++v) a.veo[v + 1] += a.veo[v];
+  a.ve.resize(2 * size_t(ne));
+  fill.assign(a.veo.begin(), a.veo.end() - 1);
+  for (uint32_t e = 0; e < ne; ++e) {
+    a.ve[fill[C.edge_vertices[2 * size_t(e)]]++] = e;
+    a.ve[fill[C.edge_vertices[2 * size_t(e) + 1]]++] = e;
+  }
+  return a;
+}
+
 // The cage as level 0, with its adjacency and tags.
 Adj cage_level(const Mesh& cage, const SubdivOptions& o, RefinedLevel& L0) {
   validate(cage, "cage");
@@ -1366,7 +1453,7 @@ SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& optio
     r.stencils.push_back(build_stencils(options, PL, t, sel));
     selected_child_faces(PL, t, sel, C.level);
     child_vertex_sharpness(PL, sel, C.level);
-    auto cadj = std::make_unique<Adj>(build_adj(C.level, sel.points()));
+    auto cadj = std::make_unique<Adj>(sparse_child_adj(PL, t, sel, C.level));
     table_edge_sharpness(options, PL, t, sel, C.level);
 
     // Provenance, completeness and the depths left.
