@@ -21,7 +21,7 @@ namespace {
 struct AdaptiveOpts {
   int depth = -1, max_depth = 10, tess = 4;
   float tolerance = -1, tess_px = 0;
-  std::string camera, resolution, errors = "measured";
+  std::string camera, resolution, errors = "auto";
   bool depth_colors = false, dynamic = false;  // dynamic: --tolerance was given
 };
 
@@ -70,8 +70,9 @@ void run_adaptive(const std::string& mesh, const std::string& out_path, const st
     throw InputError(fmt::format("{}: cannot tell the output format from the extension", out_path));
   const bool dynamic = a.dynamic;
   if (dynamic && a.depth >= 0) throw InputError("--depth and --tolerance exclude each other");
-  if (a.errors != "measured" && a.errors != "estimated")
-    throw InputError(fmt::format("--errors {}: expected 'measured' or 'estimated'", a.errors));
+  if (a.errors != "auto" && a.errors != "measured" && a.errors != "estimated")
+    throw InputError(
+        fmt::format("--errors {}: expected 'auto', 'measured' or 'estimated'", a.errors));
   if (dynamic && !(a.tolerance > 0 && std::isfinite(a.tolerance)))
     throw InputError(
         fmt::format("--tolerance {}: must be a positive number of pixels", a.tolerance));
@@ -97,7 +98,11 @@ void run_adaptive(const std::string& mesh, const std::string& out_path, const st
   std::vector<float> estimate;
   // Measured errors: every patch down to --max-depth once, its end caps' errors measured, and
   // the view's patches selected from it (no second isolation).
-  const bool measured = dynamic && a.errors == "measured";
+  // auto: measured up to kMeasuredFaces cage faces (the hierarchy is built whole, level by level,
+  // so its memory grows with the cage), estimated above.
+  constexpr size_t kMeasuredFaces = 32768;
+  const bool measured = dynamic && (a.errors == "measured" ||
+                                    (a.errors == "auto" && cage.face_count() <= kMeasuredFaces));
   PatchHierarchy hierarchy;
   if (measured) {
     hierarchy = build_patch_hierarchy(cage, po);
@@ -175,7 +180,7 @@ void run_adaptive(const std::string& mesh, const std::string& out_path, const st
         {"mode", dynamic ? "tolerance" : "depth"},
         {"depth", dynamic ? a.max_depth : depth},
         {"tolerance_px", dynamic ? nlohmann::json(a.tolerance) : nlohmann::json(nullptr)},
-        {"errors", dynamic ? nlohmann::json(a.errors) : nlohmann::json("estimated")},
+        {"errors", measured ? "measured" : "estimated"},
         {"camera",
          {{"eye", {cam.eye[0], cam.eye[1], cam.eye[2]}},
           {"target", {cam.target[0], cam.target[1], cam.target[2]}},
@@ -228,9 +233,9 @@ void add_subdivide(CLI::App& app) {
                   "--adaptive: screen error in pixels; picks a depth per vertex from the camera");
   cmd->add_option("--max-depth", o->a.max_depth, "--adaptive --tolerance: deepest level (0-12)");
   cmd->add_option("--errors", o->a.errors,
-                  "--adaptive --tolerance: 'measured' (default: every end cap down to "
-                  "--max-depth compared with the deepest surface) or 'estimated' (per-valence "
-                  "constants; no hierarchy, for very large cages)");
+                  "--adaptive --tolerance: 'measured' (every end cap down to --max-depth "
+                  "compared with the deepest surface), 'estimated' (per-valence constants, no "
+                  "hierarchy) or 'auto' (default: measured up to 32768 cage faces)");
   cmd->add_option("--camera", o->a.camera,
                   "ex,ey,ez,tx,ty,tz,fovy_deg (default: frames the model from the front)");
   cmd->add_option("--resolution", o->a.resolution, "Image size WxH for --tolerance (1280x720)");
