@@ -162,11 +162,15 @@ struct Level {
   // This level's faces and edges, which the next level's provenance refers to (refine_sparse
   // keeps its levels in place: they are reserved up front).
   const RefinedLevel* level = nullptr;
-  // Rings of the vertices asked for so far, flat: vertex v's faces are ring_face[ring_at[v] ..
-  // + ring_faces[v]), its edge ends ring_edge[ring_at[v] + i] (one more on a boundary).
-  std::vector<uint32_t> ring_at, ring_edge, ring_diag, ring_face;
-  std::vector<uint16_t> ring_faces;
-  std::vector<uint8_t> ring_flags;    // 1 boundary, 2 manifold, 4 all quads
+  // Rings of the vertices asked for so far, flat: vertex v's faces are ring_face[ring_slot[v].at ..
+  // + ring_slot[v].faces), its edge ends ring_edge[ring_slot[v].at + i] (one more on a boundary).
+  struct RingSlot {
+    uint32_t at = kNone;  // first entry in the ring arrays; kNone: not made yet
+    uint16_t faces = 0;
+    uint8_t flags = 0;  // 1 boundary, 2 manifold, 4 all quads
+  };
+  std::vector<RingSlot> ring_slot;  // one per vertex, so a lookup is one cache line
+  std::vector<uint32_t> ring_edge, ring_diag, ring_face;
   mutable std::vector<uint8_t> cuts;  // cuts_at_inf_sharp per vertex: 0 unknown, 1 no, 2 yes
 };
 
@@ -282,6 +286,7 @@ class Builder {
   std::vector<uint32_t> level_offsets_{0};  // first global point id of each level, as refined
   std::vector<std::vector<uint32_t>> node_of_level_;  // hierarchy: node of each level's faces
   GregoryCap cap_;                                    // reused: its buffers stay allocated
+  Ring spans_[4];  // a regular patch's corner spans where infinitely sharp edges cut its rings
 };
 
 // Whether an edge at v is non-manifold or joins two faces that disagree on its direction.
@@ -297,12 +302,8 @@ bool torn(const Topo& t, const uint32_t* fv, uint32_t v) {
 }
 
 RingView Builder::ring(Level& L, const RefinedLevel& R, uint32_t v) const {
-  if (L.ring_at.empty()) {
-    L.ring_at.assign(R.vertex_count(), kNone);
-    L.ring_faces.assign(R.vertex_count(), 0);
-    L.ring_flags.assign(R.vertex_count(), 0);
-  }
-  if (L.ring_at[v] == kNone) {
+  if (L.ring_slot.empty()) L.ring_slot.assign(R.vertex_count(), Level::RingSlot{});
+  if (L.ring_slot[v].at == kNone) {
     const Topo& t = L.topo;
     const uint32_t* fv = R.face_vertices.data();
     const uint32_t s0 = t.vertex_offsets[v], n = t.vertex_offsets[v + 1] - s0;
@@ -337,20 +338,21 @@ RingView Builder::ring(Level& L, const RefinedLevel& R, uint32_t v) const {
     // Keep the three arrays in step (a boundary ring has one edge more than faces).
     while (L.ring_diag.size() < L.ring_edge.size()) L.ring_diag.push_back(kNone);
     while (L.ring_face.size() < L.ring_edge.size()) L.ring_face.push_back(kNone);
-    L.ring_at[v] = at;
-    L.ring_faces[v] = uint16_t(std::min<uint32_t>(faces, 0xFFFF));
-    L.ring_flags[v] =
+    Level::RingSlot& slot = L.ring_slot[v];
+    slot.at = at;
+    slot.faces = uint16_t(std::min<uint32_t>(faces, 0xFFFF));
+    slot.flags =
         uint8_t((boundary ? 1 : 0) | (manifold && faces <= 0xFFFF ? 2 : 0) | (quads ? 4 : 0));
   }
   RingView g;
-  const uint32_t at = L.ring_at[v];
-  g.edge_end = L.ring_edge.data() + at;
-  g.diagonal = L.ring_diag.data() + at;
-  g.face = L.ring_face.data() + at;
-  g.faces = L.ring_faces[v];
-  g.boundary = L.ring_flags[v] & 1;
-  g.manifold = L.ring_flags[v] & 2;
-  g.all_quads = L.ring_flags[v] & 4;
+  const Level::RingSlot slot = L.ring_slot[v];
+  g.edge_end = L.ring_edge.data() + slot.at;
+  g.diagonal = L.ring_diag.data() + slot.at;
+  g.face = L.ring_face.data() + slot.at;
+  g.faces = slot.faces;
+  g.boundary = slot.flags & 1;
+  g.manifold = slot.flags & 2;
+  g.all_quads = slot.flags & 4;
   return g;
 }
 
@@ -538,7 +540,11 @@ int Builder::single_crease(Level& L, const RefinedLevel& R, uint32_t f, float& s
 // rule), with nothing semi-sharp.
 bool Builder::regular_vertex_inf(Level& L, const RefinedLevel& R, uint32_t v) const {
   const Topo& t = L.topo;
-  if (plain_interior(L, R, v)) return true;
+  if (plain_interior(L, R, v)) {
+    if (L.cuts.empty()) L.cuts.assign(R.vertex_count(), 0);
+    L.cuts[v] = 1;  // no sharp edge at all: nothing cuts its ring
+    return true;
+  }
   const RingView g = ring(L, R, v);
   if (!g.manifold || !g.all_quads) return false;
   const SharpEdges e = sharp_edges(L, v);
@@ -702,8 +708,8 @@ void Builder::request(size_t k, const SparseLevel& S, const LevelAdjacency& adj,
   emit(k, S);
   // What the next level needs stays (depths, requests, placement, sources); the rest goes.
   L.topo = {};
-  L.ring_at = {}, L.ring_edge = {}, L.ring_diag = {}, L.ring_face = {};
-  L.ring_faces = {}, L.ring_flags = {}, L.cuts = {};
+  L.ring_slot = {}, L.ring_edge = {}, L.ring_diag = {}, L.ring_face = {};
+  L.cuts = {};
   L.corner_sharpness = {}, L.irregular = {}, L.owned = {}, L.crease_edge = {};
   L.crease_sharpness = {}, L.force = {};
   if (k > 0) {
@@ -986,13 +992,16 @@ void Builder::emit(size_t k, const SparseLevel& S) {
                                              : kPatchGregory | uint32_t(out.gregory_params.size());
       if (regular) {
         RingView rings[4];
-        Ring spans[4];
+        Ring* spans = spans_;
         int in_ring[4];
+        bool cut[4];
         // Rings are cached in growing arrays: make all four before holding views into them.
-        for (int i = 0; i < 4; ++i)
-          if (!cuts_at_inf_sharp(L, R, a[i])) ring(L, R, a[i]);
         for (int i = 0; i < 4; ++i) {
-          if (cuts_at_inf_sharp(L, R, a[i])) {
+          cut[i] = cuts_at_inf_sharp(L, R, a[i]);
+          if (!cut[i]) ring(L, R, a[i]);
+        }
+        for (int i = 0; i < 4; ++i) {
+          if (cut[i]) {
             // Cut at infinitely sharp edges: the patch sees its span, as a boundary.
             bool sharp = false;
             spans[i] = span(L, R, corner[i], sharp);
