@@ -6,9 +6,11 @@
 // sharp patches (OpenSubdiv's useSingleCreasePatch / useInfSharpPatch; limn's defaults).
 // --mesh PATH (repeatable) replaces the shared cages, e.g. `limn shape torus-dense` (the 800k-quad
 // cage); --limn-only skips OpenSubdiv; --peak prints the peak resident memory after each side
-// (one depth and --repeat 1 to read OpenSubdiv's).
+// (one depth and --repeat 1 to read OpenSubdiv's). Runs alternate between the sides; --batched
+// runs each side's repeats in a row (each then reuses the heap its own previous run left, as a
+// long-running application would, instead of first-touching what the other side returned).
 //   limn_bench_patches [--repeat N] [--models DIR] [--depths 2,3,4,6] [--special] [--mesh PATH]
-//                      [--limn-only] [--peak]
+//                      [--limn-only] [--peak] [--batched]
 #include <fmt/format.h>
 #include <tbb/global_control.h>
 
@@ -83,7 +85,7 @@ int main(int argc, char** argv) {
   fs::path models = LIMN_SHARED_MODELS;
   std::vector<int> depths = {2, 3, 4, 6};
   std::vector<fs::path> paths;
-  bool limn_only = false, peak = false;
+  bool limn_only = false, peak = false, batched = false;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--repeat") && i + 1 < argc)
       repeat = std::max(1, std::atoi(argv[++i]));
@@ -93,6 +95,8 @@ int main(int argc, char** argv) {
       paths.emplace_back(argv[++i]);
     else if (!std::strcmp(argv[i], "--limn-only"))
       limn_only = true;
+    else if (!std::strcmp(argv[i], "--batched"))
+      batched = true;
     else if (!std::strcmp(argv[i], "--peak"))
       peak = true;
     else if (!std::strcmp(argv[i], "--special"))
@@ -122,7 +126,7 @@ int main(int argc, char** argv) {
     for (int depth : depths) {
       std::vector<double> tl, to;
       size_t pl = 0, po = 0;
-      for (int k = 0; k < repeat; ++k) {
+      auto run_limn = [&] {
         limn::PatchOptions opt;
         opt.subdiv = limn::subdiv_options(m);
         opt.depth = depth;
@@ -134,12 +138,23 @@ int main(int argc, char** argv) {
           pl = t.patch_count();
         }
         if (peak) fmt::print("  peak RSS after limn: {:.2f} GB\n", peak_gb());
-        if (limn_only) continue;
+      };
+      auto run_osd = [&] {
         const OsdResult o = osd_build(m, depth, special);
         to.push_back(o.ms);
         po = o.patches;
         if (peak) fmt::print("  peak RSS after OpenSubdiv: {:.2f} GB\n", peak_gb());
-        if (o.ms > 5000) break;  // OpenSubdiv's high-valence pathology: one run says enough
+        return o.ms <= 5000;  // OpenSubdiv's high-valence pathology: one run says enough
+      };
+      if (batched) {  // each side's runs in a row: each finds the heap its own last run left
+        for (int k = 0; k < repeat; ++k) run_limn();
+        for (int k = 0; k < repeat && !limn_only; ++k)
+          if (!run_osd()) break;
+      } else {  // interleaved: each run finds the heap the other side left
+        for (int k = 0; k < repeat; ++k) {
+          run_limn();
+          if (!limn_only && !run_osd()) break;
+        }
       }
       const double ml = median(tl), mo = to.empty() ? 0.0 : median(to);
       fmt::print("{:<22} {:>5} {:>10} {:>10} {:>10.2f} {:>10.2f} {:>7.2f}x\n",
