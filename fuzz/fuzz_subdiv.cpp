@@ -1,8 +1,8 @@
 // libFuzzer target for subdividing hostile cages: any OBJ (with OpenSubdiv tags) that parses must
 // refine uniformly, sparsely and leanly, give limit stencils and an adaptive patch table (fixed
-// and per-vertex depth) that tiles every ptex face, or throw InputError; never
-// crash, never break an internal invariant (std::logic_error escapes and is a finding). The lean
-// path must also reproduce the full refinement's points exactly.
+// and per-vertex depth, whole or region by region) that tiles every ptex face, or throw
+// InputError; never crash, never break an internal invariant (std::logic_error escapes and is a
+// finding). The lean path must also reproduce the full refinement's points exactly.
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -73,6 +73,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const limn::PatchTable sel = limn::select_patches(h, vd);
     const limn::PatchTable direct = limn::build_patches(m, po, vd);
     if (sel.patch_count() != direct.patch_count()) __builtin_trap();
+    // Region by region (regions of a few faces): the same patches.
+    limn::PatchOptions regions = po;
+    regions.batch_faces = 1 + data[0] % 5;
+    const limn::PatchTable split = limn::build_patches(m, regions, vd);
+    if (split.regular_params.size() != direct.regular_params.size() ||
+        split.gregory_params.size() != direct.gregory_params.size())
+      __builtin_trap();
   } catch (const limn::InputError&) {
   }
   return 0;

@@ -994,13 +994,31 @@ void Builder::emit(size_t k, const SparseLevel& S) {
         RingView rings[4];
         Ring* spans = spans_;
         int in_ring[4];
-        bool cut[4];
+        bool cut[4], plain[4];
+        uint32_t near_edge[4][4], near_diag[4][4];  // plain corners' rings, from the patch face
         // Rings are cached in growing arrays: make all four before holding views into them.
+        // Plain interior corners (valence 4, no sharpness, quads) need no cached ring: their
+        // faces are reached through the twins, starting at the patch face.
         for (int i = 0; i < 4; ++i) {
           cut[i] = cuts_at_inf_sharp(L, R, a[i]);
-          if (!cut[i]) ring(L, R, a[i]);
+          plain[i] = !cut[i] && plain_interior(L, R, a[i]);
+          if (!cut[i] && !plain[i]) ring(L, R, a[i]);
         }
+        const uint32_t* fv = R.face_vertices.data();
         for (int i = 0; i < 4; ++i) {
+          if (plain[i]) {
+            uint32_t c = corner[i];
+            for (int m = 0; m < 4; ++m) {
+              const uint32_t n = t.corner_next[c];
+              near_edge[i][m] = fv[n], near_diag[i][m] = fv[t.corner_next[n]];
+              c = t.corner_twin[t.corner_prev[c]];
+            }
+            RingView& g = rings[i];
+            g.edge_end = near_edge[i], g.diagonal = near_diag[i], g.face = nullptr;
+            g.faces = 4, g.boundary = false, g.manifold = g.all_quads = true;
+            in_ring[i] = 0;
+            continue;
+          }
           if (cut[i]) {
             // Cut at infinitely sharp edges: the patch sees its span, as a boundary.
             bool sharp = false;
