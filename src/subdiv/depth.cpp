@@ -73,6 +73,22 @@ ViewAxis view_axis(const Camera& c) {
   return a;
 }
 
+// The camera's frame: right = f x up and the true up = right x f (unit); false when the up
+// vector is parallel to the view axis.
+bool view_frame(const Camera& c, const ViewAxis& a, double r[3], double u[3]) {
+  const double* f = a.f;
+  r[0] = f[1] * c.up[2] - f[2] * c.up[1];
+  r[1] = f[2] * c.up[0] - f[0] * c.up[2];
+  r[2] = f[0] * c.up[1] - f[1] * c.up[0];
+  const double l = std::sqrt(dot3(r, r));
+  if (!(l > 0)) return false;
+  for (int k = 0; k < 3; ++k) r[k] /= l;
+  u[0] = r[1] * f[2] - r[2] * f[1];
+  u[1] = r[2] * f[0] - r[0] * f[2];
+  u[2] = r[0] * f[1] - r[1] * f[0];
+  return true;
+}
+
 }  // namespace
 
 double Camera::scale_at(const float p[3], double radius) const {
@@ -85,17 +101,10 @@ double Camera::scale_at(const float p[3], double radius) const {
 
 bool Camera::project(const float p[3], double& x, double& y) const {
   const ViewAxis a = view_axis(*this);
-  const double* f = a.f;
-  // right = f x up, true up = right x f
-  double r[3] = {f[1] * up[2] - f[2] * up[1], f[2] * up[0] - f[0] * up[2],
-                 f[0] * up[1] - f[1] * up[0]};
-  const double l = std::sqrt(dot3(r, r));
-  if (!(l > 0)) return false;
-  for (double& c : r) c /= l;
-  const double u[3] = {r[1] * f[2] - r[2] * f[1], r[2] * f[0] - r[0] * f[2],
-                       r[0] * f[1] - r[1] * f[0]};
+  double r[3], u[3];
+  if (!view_frame(*this, a, r, u)) return false;
   const double d[3] = {double(p[0]) - eye[0], double(p[1]) - eye[1], double(p[2]) - eye[2]};
-  const double z = dot3(d, f);
+  const double z = dot3(d, a.f);
   if (z <= 0) return false;
   x = 0.5 * width + a.f_px * dot3(d, r) / z;
   y = 0.5 * height - a.f_px * dot3(d, u) / z;
@@ -104,17 +113,10 @@ bool Camera::project(const float p[3], double& x, double& y) const {
 
 bool Camera::ball_outside(const float p[3], double radius) const {
   const ViewAxis a = view_axis(*this);
-  if (!(a.distance > 0)) return false;
-  const double* f = a.f;
-  double r[3] = {f[1] * up[2] - f[2] * up[1], f[2] * up[0] - f[0] * up[2],
-                 f[0] * up[1] - f[1] * up[0]};
-  const double l = std::sqrt(dot3(r, r));
-  if (!(l > 0)) return false;
-  for (double& c : r) c /= l;
-  const double u[3] = {r[1] * f[2] - r[2] * f[1], r[2] * f[0] - r[0] * f[2],
-                       r[0] * f[1] - r[1] * f[0]};
+  double r[3], u[3];
+  if (!(a.distance > 0) || !view_frame(*this, a, r, u)) return false;
   const double d[3] = {double(p[0]) - eye[0], double(p[1]) - eye[1], double(p[2]) - eye[2]};
-  const double z = dot3(d, f), x = dot3(d, r), y = dot3(d, u);
+  const double z = dot3(d, a.f), x = dot3(d, r), y = dot3(d, u);
   if (z + radius <= 0) return true;
   // Side planes through the eye: x = +-z w / (2 f_px), y = +-z h / (2 f_px); their distance
   // from the ball's centre against the radius.
