@@ -257,7 +257,8 @@ class Builder {
 
  private:
   RingView ring(Level& L, const RefinedLevel& R, uint32_t v) const;
-  Ring span(const Level& L, const RefinedLevel& R, uint32_t corner, bool& sharp) const;
+  // Writes into `g` (its buffers reused from call to call).
+  void span(const Level& L, const RefinedLevel& R, uint32_t corner, bool& sharp, Ring& g) const;
   struct SharpEdges {
     int inf = 0, semi = 0;  // infinitely sharp (boundary ones included) and semi-sharp edges
     bool boundary = false;
@@ -286,7 +287,8 @@ class Builder {
   std::vector<uint32_t> level_offsets_{0};  // first global point id of each level, as refined
   std::vector<std::vector<uint32_t>> node_of_level_;  // hierarchy: node of each level's faces
   GregoryCap cap_;                                    // reused: its buffers stay allocated
-  Ring spans_[4];  // a regular patch's corner spans where infinitely sharp edges cut its rings
+  Ring spans_[4];  // a patch's corner spans (end caps; regular patches cut by sharp edges)
+  mutable Ring span_scratch_;  // regular_vertex_inf's
 };
 
 // Whether an edge at v is non-manifold or joins two faces that disagree on its direction.
@@ -397,7 +399,8 @@ bool Builder::cuts_at_inf_sharp(const Level& L, const RefinedLevel& R, uint32_t 
 // infinitely sharp features approximated as smooth: a one-face boundary vertex, OpenSubdiv's
 // sharp and legacy corners; with infinitely sharp patches also corners of sharp edges and
 // infinitely sharp vertices).
-Ring Builder::span(const Level& L, const RefinedLevel& R, uint32_t corner, bool& sharp) const {
+void Builder::span(const Level& L, const RefinedLevel& R, uint32_t corner, bool& sharp,
+                   Ring& g) const {
   const Topo& t = L.topo;
   const uint32_t* fv = R.face_vertices.data();
   const uint32_t v = fv[corner];
@@ -415,7 +418,8 @@ Ring Builder::span(const Level& L, const RefinedLevel& R, uint32_t corner, bool&
     if (prev == corner) break;
     start = prev;
   }
-  Ring g;
+  g.edge_end.clear(), g.diagonal.clear(), g.face.clear();
+  g.all_quads = true;
   g.boundary = cut(start);
   uint32_t c = start;
   for (uint32_t guard = 0; guard <= n; ++guard) {
@@ -446,7 +450,6 @@ Ring Builder::span(const Level& L, const RefinedLevel& R, uint32_t corner, bool&
     sharp = corner_tag || (cut_sharp ? !crease : vs >= kInf);
     if (!sharp && e.boundary && n == 1) sharp = true;  // OpenSubdiv's legacy smooth corner
   }
-  return g;
 }
 
 // The common regular case, told without walking the ring: four faces (refined levels are all
@@ -555,7 +558,8 @@ bool Builder::regular_vertex_inf(Level& L, const RefinedLevel& R, uint32_t v) co
   const size_t want = vs >= kInf || e.inf >= 3 ? 1 : 2;
   for (uint32_t i = t.vertex_offsets[v]; i < t.vertex_offsets[v + 1]; ++i) {
     bool sharp = false;
-    if (span(L, R, t.vertex_corners[i], sharp).face.size() != want) return false;
+    span(L, R, t.vertex_corners[i], sharp, span_scratch_);
+    if (span_scratch_.face.size() != want) return false;
   }
   return true;
 }
@@ -1022,7 +1026,7 @@ void Builder::emit(size_t k, const SparseLevel& S) {
           if (cut[i]) {
             // Cut at infinitely sharp edges: the patch sees its span, as a boundary.
             bool sharp = false;
-            spans[i] = span(L, R, corner[i], sharp);
+            span(L, R, corner[i], sharp, spans[i]);
             RingView& g = rings[i];
             g.edge_end = spans[i].edge_end.data();
             g.diagonal = spans[i].diagonal.data();
@@ -1085,7 +1089,8 @@ void Builder::emit(size_t k, const SparseLevel& S) {
         cap.reset();
         for (int i = 0; i < 4; ++i) {
           GregoryCap::Corner& cc = cap.c[i];
-          const Ring g = span(L, R, corner[i], cc.sharp);
+          const Ring& g = spans_[i];
+          span(L, R, corner[i], cc.sharp, spans_[i]);
           if (!g.all_quads) throw std::logic_error("patches: an end cap next to a non-quad");
           cc.v = off + a[i];
           cc.faces = int(g.face.size());
