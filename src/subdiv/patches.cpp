@@ -30,10 +30,9 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// A linear combination of an end cap's points: dense over the cap's support (the sorted ids of
-// its four corners and their rings), so adding a term is two lookups (the point's slot in the
-// support, from a map by point id), combining rows is a dense axpy, and emitting walks the
-// support in id order with no sorting.
+// A linear combination of an end cap's points: dense over the cap's support (the ids of its four
+// corners and their rings), so adding a term is two lookups (the point's slot in the support,
+// from a map by point id), combining rows is a dense axpy, and emitting walks the support.
 struct Terms {
   const std::vector<uint32_t>* ids = nullptr;
   const uint32_t* slot = nullptr;  // slot[p - base]: p's place in ids (valid for ids only)
@@ -216,7 +215,7 @@ class GregoryCap {
 
   Corner c[4];
   Terms p[4], ep[4], em[4], fp[4], fm[4];
-  std::vector<uint32_t> support;  // sorted ids of the corners and their rings
+  std::vector<uint32_t> support;  // ids of the corners and their rings, each once, as met
   std::vector<uint32_t> slots;    // by point id - first: place in support (its entries only)
   std::vector<uint32_t> row_idx;  // emit_rows' scratch: the rows' terms before they are copied
   std::vector<float> row_w;
@@ -723,17 +722,20 @@ void Builder::request(size_t k, const SparseLevel& S, const LevelAdjacency& adj,
 }
 
 void GregoryCap::finish_topology(uint32_t first, uint32_t count) {
+  // The union of the corners and rings in the order met, deduplicated through the slot map (a
+  // stale slot never names a matching entry: the support's ids are distinct).
   support.clear();
-  for (const Corner& k : c) {
-    support.push_back(k.v);
-    support.insert(support.end(), k.ring.begin(), k.ring.end());
-  }
-  std::sort(support.begin(), support.end());
-  support.erase(std::unique(support.begin(), support.end()), support.end());
   if (slots.size() < count) slots.resize(count);
-  for (size_t i = 0; i < support.size(); ++i) {
-    if (support[i] - first >= count) throw std::logic_error("patches: end-cap point off level");
-    slots[support[i] - first] = uint32_t(i);
+  auto take = [&](uint32_t id) {
+    if (id - first >= count) throw std::logic_error("patches: end-cap point off level");
+    const uint32_t s = slots[id - first];
+    if (s < support.size() && support[s] == id) return;
+    slots[id - first] = uint32_t(support.size());
+    support.push_back(id);
+  };
+  for (const Corner& k : c) {
+    take(k.v);
+    for (const uint32_t id : k.ring) take(id);
   }
   for (int i = 0; i < 4; ++i)
     for (Terms* t : {&p[i], &ep[i], &em[i], &fp[i], &fm[i]})
