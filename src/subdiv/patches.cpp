@@ -8,10 +8,13 @@
 #include "limn/subdiv/patches.hpp"
 
 #include <fmt/format.h>
+#include <tbb/parallel_pipeline.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <numbers>
 #include <stdexcept>
 #include <unordered_map>
@@ -1309,6 +1312,18 @@ namespace {
 constexpr uint32_t kDefaultBatch = 16384;
 constexpr int kTrustedRings = 2, kContextRings = 1;
 
+// One region on its way through the pipeline: cut, isolated, merged.
+struct Region {
+  uint32_t index = 0;
+  size_t region_faces = 0;         // faces[0, region_faces) are the region's own (role 2)
+  std::vector<uint32_t> faces;     // cage faces of the sub-cage, the region's first
+  std::vector<uint32_t> vertices;  // cage vertex of each sub-cage vertex
+  std::vector<uint8_t> roles, depth;
+  Mesh mesh;  // the sub-cage (dropped once isolated)
+  PatchTable table;
+  PatchStats stats;
+};
+
 class RegionBuilder {
  public:
   RegionBuilder(const Mesh& cage, const PatchOptions& o, std::span<const uint8_t> depth)
@@ -1365,26 +1380,48 @@ class RegionBuilder {
   PatchTable run(uint32_t batch, PatchStats* stats) {
     const size_t nf = cage_.face_count();
     size_t seed = 0, emitted = 0;
-    for (uint32_t region = 0;; ++region) {
-      while (seed < nf && done_[seed]) ++seed;
-      if (seed == nf) break;
-      grow(uint32_t(seed), batch);
-      emitted += region_faces_;
-      build_region(region, stats);
-      if (region == 0) reserve(double(nf) / double(std::max<size_t>(emitted, 1)));
-    }
+    uint32_t next = 0;
+    // Regions are cut and merged in order (so the table does not depend on the thread count) and
+    // isolated in parallel, a few in flight at a time (their memory stays bounded).
+    const size_t tokens = 2 * size_t(std::max(1, tbb::this_task_arena::max_concurrency()));
+    tbb::parallel_pipeline(
+        tokens,
+        tbb::make_filter<void, Region*>(tbb::filter_mode::serial_in_order,
+                                        [&](tbb::flow_control& fc) -> Region* {
+                                          while (seed < nf && done_[seed]) ++seed;
+                                          if (seed == nf) {
+                                            fc.stop();
+                                            return nullptr;
+                                          }
+                                          auto r = std::make_unique<Region>();
+                                          r->index = next++;
+                                          grow(uint32_t(seed), batch, *r);
+                                          extract(*r);
+                                          return r.release();
+                                        }) &
+            tbb::make_filter<Region*, Region*>(tbb::filter_mode::parallel,
+                                               [&](Region* r) {
+                                                 isolate_region(*r);
+                                                 return r;
+                                               }) &
+            tbb::make_filter<Region*, void>(tbb::filter_mode::serial_in_order, [&](Region* raw) {
+              const std::unique_ptr<Region> r(raw);
+              emitted += r->region_faces;
+              merge(*r, stats);
+              if (r->index == 0) reserve(double(nf) / double(std::max<size_t>(emitted, 1)));
+            }));
     finish(stats);
     return std::move(out_);
   }
 
  private:
   // The region from `seed` (breadth-first over faces sharing a vertex) and its rings.
-  void grow(uint32_t seed, uint32_t batch) {
-    faces_.clear(), roles_.clear();
+  void grow(uint32_t seed, uint32_t batch, Region& r) {
+    std::vector<uint32_t>& faces = r.faces;
     auto add = [&](uint32_t f, uint8_t role) {
-      face_local_[f] = uint32_t(faces_.size());
-      faces_.push_back(f);
-      roles_.push_back(role);
+      face_local_[f] = uint32_t(faces.size());
+      faces.push_back(f);
+      r.roles.push_back(role);
     };
     const uint32_t* fv = cage_.face_vertices.data();
     auto around = [&](uint32_t f, auto&& visit) {
@@ -1396,39 +1433,39 @@ class RegionBuilder {
     };
     add(seed, 2);
     done_[seed] = 1;
-    for (size_t head = 0; head < faces_.size() && faces_.size() < batch; ++head)
-      around(faces_[head], [&](uint32_t g) {
-        if (faces_.size() < batch && face_local_[g] == kNone && !done_[g]) {
+    for (size_t head = 0; head < faces.size() && faces.size() < batch; ++head)
+      around(faces[head], [&](uint32_t g) {
+        if (faces.size() < batch && face_local_[g] == kNone && !done_[g]) {
           add(g, 2);
           done_[g] = 1;
         }
       });
-    region_faces_ = faces_.size();
+    r.region_faces = faces.size();
     size_t begin = 0;
     for (int ring = 0; ring < kTrustedRings + kContextRings; ++ring) {
-      const size_t end = faces_.size();
+      const size_t end = faces.size();
       const uint8_t role = ring < kTrustedRings ? 1 : 0;
       for (size_t i = begin; i < end; ++i)
-        around(faces_[i], [&](uint32_t g) {
+        around(faces[i], [&](uint32_t g) {
           if (face_local_[g] == kNone) add(g, role);
         });
       begin = end;
     }
   }
 
-  void build_region(uint32_t region, PatchStats* stats) {
-    // The sub-cage: the region's faces and rings over their own vertices, with the cage's tags.
-    Mesh& m = sub_;
-    m = Mesh{};
+  // The sub-cage: the region's faces and rings over their own vertices, with the cage's tags.
+  void extract(Region& r) {
+    Mesh& m = r.mesh;
     m.tags = cage_.tags;
-    vertices_.clear();
+    const std::vector<uint32_t>& faces = r.faces;
+    std::vector<uint32_t>& verts = r.vertices;
     const uint32_t* fv = cage_.face_vertices.data();
-    for (const uint32_t f : faces_) {
+    for (const uint32_t f : faces) {
       for (uint32_t c = cage_.face_offsets[f]; c < cage_.face_offsets[f + 1]; ++c) {
         const uint32_t v = fv[c];
         if (vertex_local_[v] == kNone) {
-          vertex_local_[v] = uint32_t(vertices_.size());
-          vertices_.push_back(v);
+          vertex_local_[v] = uint32_t(verts.size());
+          verts.push_back(v);
         }
         m.face_vertices.push_back(vertex_local_[v]);
       }
@@ -1436,46 +1473,52 @@ class RegionBuilder {
       if (hole_[f]) m.hole_faces.push_back(face_local_[f]);
     }
     if (!creases_.empty())
-      for (const uint32_t f : faces_) {  // every vertex has its id now
+      for (const uint32_t f : faces) {  // every vertex has its id now
         const std::span<const uint32_t> vs = cage_.face(f);
         for (size_t j = 0; j < vs.size(); ++j) {
           const uint32_t a = vs[j], b = vs[(j + 1) % vs.size()];
           const auto it = creases_.find(edge_key(a, b));
-          if (it == creases_.end() || it->second.region == region) continue;
-          it->second.region = region;
+          if (it == creases_.end() || it->second.region == r.index) continue;
+          it->second.region = r.index;
           m.crease_edges.insert(m.crease_edges.end(), {vertex_local_[a], vertex_local_[b]});
           m.crease_sharpness.push_back(it->second.sharpness);
         }
       }
-    m.positions.resize(3 * vertices_.size());
-    for (size_t i = 0; i < vertices_.size(); ++i) {
-      std::copy_n(&cage_.positions[3 * size_t(vertices_[i])], 3, &m.positions[3 * i]);
-      if (vertex_sharpness_[vertices_[i]] > 0.0f) {
+    m.positions.resize(3 * verts.size());
+    for (size_t i = 0; i < verts.size(); ++i) {
+      std::copy_n(&cage_.positions[3 * size_t(verts[i])], 3, &m.positions[3 * i]);
+      if (vertex_sharpness_[verts[i]] > 0.0f) {
         m.corner_vertices.push_back(uint32_t(i));
-        m.corner_sharpness.push_back(vertex_sharpness_[vertices_[i]]);
+        m.corner_sharpness.push_back(vertex_sharpness_[verts[i]]);
       }
     }
-    std::vector<uint8_t> depth;
     if (!depth_.empty())
-      for (const uint32_t v : vertices_) depth.push_back(depth_[v]);
+      for (const uint32_t v : verts) r.depth.push_back(depth_[v]);
+    for (const uint32_t f : faces) face_local_[f] = kNone;
+    for (const uint32_t v : verts) vertex_local_[v] = kNone;
+  }
 
-    PatchStats ps;
-    PatchTable t;
+  // Touches nothing shared: regions are isolated in parallel.
+  void isolate_region(Region& r) const {
+    const auto t0 = std::chrono::steady_clock::now();
     {
-      Builder b(m, o_, depth);
-      b.set_roles(roles_);
-      b.set_stats(&ps);
-      SparseRefinement r = isolate(m, o_, b);
-      b.build(t, r, &ps);
+      Builder b(r.mesh, o_, r.depth);
+      b.set_roles(r.roles);
+      b.set_stats(&r.stats);
+      SparseRefinement s = isolate(r.mesh, o_, b);
+      b.build(r.table, s, &r.stats);
     }
-    merge(t, stats, ps);
-    for (const uint32_t f : faces_) face_local_[f] = kNone;
-    for (const uint32_t v : vertices_) vertex_local_[v] = kNone;
+    r.stats.refine_ms = ms_since(t0) - r.stats.patches_ms;
+    r.mesh = Mesh{};
   }
 
   // Appends a region's table: level-k rows after the earlier regions' (ids shifted by their
   // counts), patch points as ids within their level (rebased in finish()).
-  void merge(const PatchTable& t, PatchStats* stats, const PatchStats& ps) {
+  void merge(const Region& r, PatchStats* stats) {
+    const PatchTable& t = r.table;
+    const PatchStats& ps = r.stats;
+    const std::vector<uint32_t>& verts = r.vertices;
+    const std::vector<uint32_t>& faces = r.faces;
     const size_t nl = t.level_offsets.size() - 1;
     if (out_.level_stencils.size() < nl - 1) out_.level_stencils.resize(nl - 1);
     if (count_.size() < nl) count_.resize(nl, 0);
@@ -1486,7 +1529,7 @@ class RegionBuilder {
       const uint32_t shift = uint32_t(dst.indices.size());
       for (size_t i = 1; i < src.offsets.size(); ++i) dst.offsets.push_back(shift + src.offsets[i]);
       if (k == 1) {
-        for (const uint32_t p : src.indices) dst.indices.push_back(vertices_[p]);
+        for (const uint32_t p : src.indices) dst.indices.push_back(verts[p]);
       } else {
         for (const uint32_t p : src.indices) dst.indices.push_back(base[k - 1] + p);
       }
@@ -1497,10 +1540,10 @@ class RegionBuilder {
     auto local = [&](uint32_t p, uint32_t k) {
       if (p < t.level_offsets[k] || p >= t.level_offsets[k + 1])
         throw std::logic_error("patches: a region's patch reads another level");
-      return k == 0 ? vertices_[p] : base[k] + (p - t.level_offsets[k]);
+      return k == 0 ? verts[p] : base[k] + (p - t.level_offsets[k]);
     };
     auto place = [&](PatchParam pp) {
-      const uint32_t f = faces_[pp.base_face];
+      const uint32_t f = faces[pp.base_face];
       pp.ptex = out_.ptex_of_face[f] + (pp.ptex - t.ptex_of_face[pp.base_face]);
       pp.base_face = f;
       return pp;
@@ -1524,11 +1567,11 @@ class RegionBuilder {
     const StencilTable& g = t.gregory_stencils;
     StencilTable& dg = out_.gregory_stencils;
     const uint32_t shift = uint32_t(dg.indices.size());
-    for (size_t r = 0; r < g.size(); ++r) {
-      const uint32_t k = t.gregory_params[r / 20].level;
-      for (uint32_t j = g.offsets[r]; j < g.offsets[r + 1]; ++j)
+    for (size_t row = 0; row < g.size(); ++row) {
+      const uint32_t k = t.gregory_params[row / 20].level;
+      for (uint32_t j = g.offsets[row]; j < g.offsets[row + 1]; ++j)
         dg.indices.push_back(local(g.indices[j], k));
-      dg.offsets.push_back(shift + g.offsets[r + 1]);
+      dg.offsets.push_back(shift + g.offsets[row + 1]);
     }
     dg.weights.insert(dg.weights.end(), g.weights.begin(), g.weights.end());
     if (stats) {
@@ -1538,6 +1581,7 @@ class RegionBuilder {
         for (size_t k = 0; k < from->size(); ++k) (*to)[k] += (*from)[k];
       }
       stats->patches_ms += ps.patches_ms;
+      stats->refine_ms += ps.refine_ms;
     }
   }
 
@@ -1599,11 +1643,8 @@ class RegionBuilder {
   std::unordered_map<uint64_t, Crease> creases_;
   std::vector<float> vertex_sharpness_;
   std::vector<uint8_t> hole_, done_;
-  std::vector<uint32_t> face_local_, vertex_local_;
-  std::vector<uint32_t> faces_, vertices_, count_{0};
-  std::vector<uint8_t> roles_;
-  size_t region_faces_ = 0;
-  Mesh sub_;
+  std::vector<uint32_t> face_local_, vertex_local_;  // kNone outside the region being cut
+  std::vector<uint32_t> count_{0};                   // points per level so far
   PatchTable out_;
 };
 
@@ -1622,9 +1663,7 @@ PatchTable build_patches(const Mesh& cage, const PatchOptions& options,
   if (options.batch_faces ? nf > batch : nf > 2 * size_t(batch)) {
     validate(cage, "cage");
     RegionBuilder rb(cage, options, vertex_depth);
-    PatchTable out = rb.run(batch, stats);
-    if (stats) stats->refine_ms = ms_since(t0) - stats->patches_ms;
-    return out;
+    return rb.run(batch, stats);  // the stats' times: summed over the regions (thread time)
   }
   Builder b(cage, options, vertex_depth);
   b.set_stats(stats);

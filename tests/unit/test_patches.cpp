@@ -1,8 +1,10 @@
 // Feature-adaptive patch tables against OpenSubdiv's adaptive PatchTable (same isolation level,
 // Gregory-basis end caps), evaluated on a grid of every ptex face.
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <map>
 #include <string>
@@ -400,6 +402,36 @@ TEST(Patches, RegionBuildsEqualTheWholeCage) {
     o.subdiv = subdiv_options(cage);
     o.depth = 3;
     expect_regions_equal_whole(cage, o, {}, path.filename().string());
+  }
+  // Regions run in parallel, but the table does not depend on the thread count.
+  {
+    const int valences[] = {3, 5, 6};
+    const Mesh cage = make_torus(24, 12, valences);
+    PatchOptions o;
+    o.subdiv = subdiv_options(cage);
+    o.depth = 3;
+    o.batch_faces = 9;
+    const PatchTable many = build_patches(cage, o);
+    PatchTable one;
+    {
+      const tbb::global_control serial(tbb::global_control::max_allowed_parallelism, 1);
+      one = build_patches(cage, o);
+    }
+    EXPECT_EQ(one.level_offsets, many.level_offsets);
+    EXPECT_EQ(one.regular_points, many.regular_points);
+    EXPECT_EQ(one.gregory_points, many.gregory_points);
+    EXPECT_EQ(one.gregory_stencils.indices, many.gregory_stencils.indices);
+    EXPECT_EQ(one.gregory_stencils.weights, many.gregory_stencils.weights);
+    ASSERT_EQ(one.level_stencils.size(), many.level_stencils.size());
+    for (size_t k = 0; k < one.level_stencils.size(); ++k) {
+      EXPECT_EQ(one.level_stencils[k].offsets, many.level_stencils[k].offsets) << k;
+      EXPECT_EQ(one.level_stencils[k].indices, many.level_stencils[k].indices) << k;
+      EXPECT_EQ(one.level_stencils[k].weights, many.level_stencils[k].weights) << k;
+    }
+    ASSERT_EQ(one.regular_params.size(), many.regular_params.size());
+    for (size_t i = 0; i < one.regular_params.size(); ++i)
+      ASSERT_EQ(std::memcmp(&one.regular_params[i], &many.regular_params[i], sizeof(PatchParam)), 0)
+          << i;
   }
   // A crease tag between vertices that share no edge is refused by both.
   Mesh bad = make_shape("torus");

@@ -64,8 +64,9 @@ struct PatchOptions {
   bool single_crease_patches = true;
   /// Cages of more faces are isolated region by region, each region about this many faces with
   /// its neighbourhood (0: regions of 16384 faces, for cages of more than 32768): the working
-  /// memory is a region's, not a whole level's. The patches are the same; points that patches
-  /// on both sides of a region border use are stored once per region.
+  /// memory is a region's, not a whole level's, and regions are isolated in parallel (TBB; the
+  /// table is the same for any thread count). The patches are the same as a whole-cage build's;
+  /// points that patches on both sides of a region border use are stored once per region.
   uint32_t batch_faces = 0;
 };
 
@@ -75,6 +76,7 @@ struct PatchStats {
   size_t points = 0;      ///< refined points (all levels) plus end-cap points
   double refine_ms = 0;   ///< sparse refinement with classification
   double patches_ms = 0;  ///< gathering patch points and end-cap stencils
+                          ///< (region builds: both summed over the regions' threads)
 };
 
 /// Flat, GPU-ready patch table. Points are numbered globally: the cage's, then each refined
