@@ -342,6 +342,15 @@ void measure_vertex_errors(const Mesh& cage, const PatchHierarchy& h, VertexErro
 
 namespace {
 
+// Hysteresis: a deeper previous depth holds until the continuous need falls `hysteresis`
+// levels below it.
+int hold(std::span<const uint8_t> previous, size_t v, int depth, double need,
+         const DepthOptions& o) {
+  if (!previous.empty() && previous[v] > depth && need > previous[v] - 1 - o.hysteresis)
+    return previous[v];
+  return depth;
+}
+
 // The measured error bound of v at depth d (object units) and the reach of its end caps.
 double measured_error(const VertexErrorModel& m, size_t v, int d, double& reach) {
   const int levels = m.levels;
@@ -382,9 +391,7 @@ int measured_depth(const Mesh& cage, const VertexErrorModel& m, const Camera& ca
     const double span = std::log(above / std::max(here, 1e-300));
     need = depth - 1 + (span > 0 ? std::min(1.0, std::log(above) / span) : 1.0);
   }
-  if (!previous.empty() && previous[v] > depth && need > previous[v] - 1 - o.hysteresis)
-    depth = previous[v];
-  return depth;
+  return hold(previous, v, depth, need, o);
 }
 
 }  // namespace
@@ -432,10 +439,7 @@ std::vector<uint8_t> select_depths(const Mesh& cage, const VertexErrorModel& mod
       int depth = 0;
       double need = need_at(0);
       while (depth < 12 && need > depth + 1e-9) need = need_at(++depth);
-      // Hysteresis: hold a deeper previous depth until the need falls clearly below it.
-      if (!previous.empty() && previous[v] > depth && need > previous[v] - 1 - o.hysteresis)
-        depth = previous[v];
-      d[v] = uint8_t(std::clamp(depth, o.min_depth, o.max_depth));
+      d[v] = uint8_t(std::clamp(hold(previous, v, depth, need, o), o.min_depth, o.max_depth));
     }
     if (estimate_px && model.levels > 0) {
       double reach;

@@ -33,6 +33,18 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
+// First ptex face of each cage face (one per quad, one per corner of any other face), and the
+// total at the end.
+std::vector<uint32_t> ptex_offsets(const Mesh& cage) {
+  std::vector<uint32_t> first(1, 0);
+  first.reserve(cage.face_count() + 1);
+  for (size_t f = 0; f < cage.face_count(); ++f) {
+    const uint32_t n = cage.face_size(f);
+    first.push_back(first.back() + (n == 4 ? 1 : n));
+  }
+  return first;
+}
+
 // A linear combination of an end cap's points: dense over the cap's support (the ids of its four
 // corners and their rings), so adding a term is two lookups (the point's slot in the support,
 // from a map by point id), combining rows is a dense axpy, and emitting walks the support.
@@ -55,7 +67,8 @@ struct Terms {
   void add(const Terms& o, double s) {
     for (size_t i = 0; i < w.size(); ++i) w[i] += o.w[i] * s;
   }
-  // The row's non-zero terms at `at` (room for the whole support); returns how many.
+  // Writes the row's non-zero terms to idx/weight (room for the whole support); returns how
+  // many.
   size_t emit(uint32_t* idx, float* weight) const {
     size_t n = 0;
     for (size_t i = 0; i < w.size(); ++i) {
@@ -899,8 +912,8 @@ void GregoryCap::face_points(int i) {
   if (k.fm_copied) fm[i] = fp[i];
 }
 
-// The 20 rows in point order (corner i: P, Ep, Em, Fp, Fm), written in place: the arrays grow
-// once per cap and shrink back to the terms kept.
+// The 20 rows in point order (corner i: P, Ep, Em, Fp, Fm): gathered in a reused scratch, then
+// appended in one copy per array.
 void GregoryCap::emit_rows(StencilTable& table) {
   const size_t room = 20 * support.size();
   if (row_idx.size() < room) row_idx.resize(room), row_w.resize(room);
@@ -1176,11 +1189,7 @@ void Builder::build(PatchTable& out, SparseRefinement& r, PatchStats* stats) {
   out.level_stencils = std::move(r.stencils);
   prune_points(out);
   out.ptex_count = ptex_count_;
-  out.ptex_of_face.assign(1, 0);
-  for (size_t f = 0; f < cage_.face_count(); ++f) {
-    const uint32_t n = uint32_t(cage_.face_size(f));
-    out.ptex_of_face.push_back(out.ptex_of_face.back() + (n == 4 ? 1 : n));
-  }
+  out.ptex_of_face = ptex_offsets(cage_);
   // End-cap points come after every level's: their ids were counted from 0.
   const uint32_t cap_base = out.level_offsets.back();
   for (uint32_t& p : out.gregory_points) p += cap_base;
@@ -1369,11 +1378,7 @@ class RegionBuilder {
     vertex_local_.assign(nv, kNone);
     done_.assign(nf, 0);
     out_.options = o.subdiv;
-    out_.ptex_of_face.assign(1, 0);
-    for (size_t f = 0; f < nf; ++f) {
-      const uint32_t n = cage.face_size(f);
-      out_.ptex_of_face.push_back(out_.ptex_of_face.back() + (n == 4 ? 1 : n));
-    }
+    out_.ptex_of_face = ptex_offsets(cage);
     out_.ptex_count = out_.ptex_of_face.back();
   }
 
@@ -1386,30 +1391,33 @@ class RegionBuilder {
     const size_t tokens = 2 * size_t(std::max(1, tbb::this_task_arena::max_concurrency()));
     tbb::parallel_pipeline(
         tokens,
-        tbb::make_filter<void, Region*>(tbb::filter_mode::serial_in_order,
-                                        [&](tbb::flow_control& fc) -> Region* {
-                                          while (seed < nf && done_[seed]) ++seed;
-                                          if (seed == nf) {
-                                            fc.stop();
-                                            return nullptr;
-                                          }
-                                          auto r = std::make_unique<Region>();
-                                          r->index = next++;
-                                          grow(uint32_t(seed), batch, *r);
-                                          extract(*r);
-                                          return r.release();
-                                        }) &
-            tbb::make_filter<Region*, Region*>(tbb::filter_mode::parallel,
-                                               [&](Region* r) {
-                                                 isolate_region(*r);
-                                                 return r;
-                                               }) &
-            tbb::make_filter<Region*, void>(tbb::filter_mode::serial_in_order, [&](Region* raw) {
-              const std::unique_ptr<Region> r(raw);
-              emitted += r->region_faces;
-              merge(*r, stats);
-              if (r->index == 0) reserve(double(nf) / double(std::max<size_t>(emitted, 1)));
-            }));
+        // Shared pointers, so regions in flight are freed when a stage throws.
+        tbb::make_filter<void, std::shared_ptr<Region>>(
+            tbb::filter_mode::serial_in_order,
+            [&](tbb::flow_control& fc) -> std::shared_ptr<Region> {
+              while (seed < nf && done_[seed]) ++seed;
+              if (seed == nf) {
+                fc.stop();
+                return nullptr;
+              }
+              auto r = std::make_shared<Region>();
+              r->index = next++;
+              grow(uint32_t(seed), batch, *r);
+              extract(*r);
+              return r;
+            }) &
+            tbb::make_filter<std::shared_ptr<Region>, std::shared_ptr<Region>>(
+                tbb::filter_mode::parallel,
+                [&](std::shared_ptr<Region> r) {
+                  isolate_region(*r);
+                  return r;
+                }) &
+            tbb::make_filter<std::shared_ptr<Region>, void>(
+                tbb::filter_mode::serial_in_order, [&](const std::shared_ptr<Region>& r) {
+                  emitted += r->region_faces;
+                  merge(*r, stats);
+                  if (r->index == 0) reserve(double(nf) / double(std::max<size_t>(emitted, 1)));
+                }));
     finish(stats);
     return std::move(out_);
   }

@@ -16,7 +16,7 @@
 // level's adjacency is derived from its parent's in closed form, without any search: child
 // face c is parent corner c, child corner 4c+i, child edges are one per parent corner (face
 // point to edge point) then two per parent edge (edge point to each end's vertex point). Sparse
-// levels are small and are built from their faces like the cage.
+// levels get theirs in closed form too (sparse_child_adj), with one corner per selected face.
 #include "limn/subdiv/refine.hpp"
 
 #include <fmt/format.h>
@@ -183,7 +183,7 @@ struct Adj {
   std::vector<uint32_t> eco{0}, ec;          // edge -> the corners on it (one per face)
   std::vector<uint32_t> vco{0}, vc;          // vertex -> the corners at it (one per face)
   std::vector<uint32_t> veo{0}, ve;          // vertex -> its edges
-  std::vector<uint8_t> edge_non_manifold;    // from build_adj only (the cage, sparse levels)
+  std::vector<uint8_t> edge_non_manifold;    // from build_adj only (the cage)
   std::vector<uint8_t> vertex_non_manifold;  // faces around it are not one fan (build_adj)
 
   uint32_t face_of(uint32_t c) const { return quads ? c >> 2 : corner_face[c]; }
