@@ -131,19 +131,26 @@ float fractional_weight(const SubdivOptions& o, float pv, float cv, const float*
 }
 
 // A stencil under construction: weighted parent vertices, merged per vertex as they are added
-// (stencils hold a handful of distinct vertices, so a linear scan beats sorting).
+// (stencils hold a handful of distinct vertices, so a linear scan beats sorting). A 64-bit
+// filter of the vertices seen skips the scan for most new vertices: regular stencils have no
+// repeats at all.
 struct Terms {
   std::vector<uint32_t> idx;
   std::vector<double> w;
   size_t n = 0;
+  uint64_t seen = 0;
   Terms() : idx(64), w(64) {}
   [[gnu::always_inline]] inline void add(uint32_t v, double weight) {
-    uint32_t* ix = idx.data();
-    for (size_t i = 0; i < n; ++i)
-      if (ix[i] == v) {
-        w[i] += weight;
-        return;
-      }
+    const uint64_t bit = uint64_t(1) << ((v * 0x9E3779B1u) >> 26);
+    if (seen & bit) {
+      uint32_t* ix = idx.data();
+      for (size_t i = 0; i < n; ++i)
+        if (ix[i] == v) {
+          w[i] += weight;
+          return;
+        }
+    }
+    seen |= bit;
     if (n == idx.size()) grow();
     idx[n] = v, w[n] = weight, ++n;
   }
@@ -157,21 +164,26 @@ struct Terms {
   void append(const Terms& other, double s) {
     for (size_t i = 0; i < other.n; ++i) add(other.idx[i], other.w[i] * s);
   }
-  void clear() { n = 0; }
+  void clear() { n = 0, seen = 0; }
+  // Appends the stencil (inserted, not resized and overwritten: a zero fill per stencil cost
+  // as much as computing it).
   void emit(StencilTable& table) {
     const size_t base = table.indices.size();
     if (base + n > table.indices.capacity()) {
       table.indices.reserve(2 * (base + n));
       table.weights.reserve(2 * (base + n));
     }
-    table.indices.resize(base + n);
-    table.weights.resize(base + n);
-    uint32_t* ti = table.indices.data() + base;
-    float* tw = table.weights.data() + base;
-    for (size_t i = 0; i < n; ++i) ti[i] = idx[i], tw[i] = static_cast<float>(w[i]);
+    float inline_w[kMaxInline];
+    std::vector<float> big;
+    float* wf = inline_w;
+    if (n > kMaxInline) big.resize(n), wf = big.data();
+    for (size_t i = 0; i < n; ++i) wf[i] = static_cast<float>(w[i]);
+    table.indices.insert(table.indices.end(), idx.data(), idx.data() + n);
+    table.weights.insert(table.weights.end(), wf, wf + n);
     table.offsets.push_back(static_cast<uint32_t>(base + n));
-    n = 0;
+    clear();
   }
+  static constexpr size_t kMaxInline = 32;
 };
 
 // Adjacency of one level as flat CSR arrays. On quad levels (every level after the first, and
@@ -196,15 +208,21 @@ struct Adj {
 struct LevelRef {
   const RefinedLevel& L;
   const Adj& a;
-  uint32_t next(uint32_t c) const {
+  [[gnu::always_inline]] uint32_t next(uint32_t c) const {
     if (a.quads) return (c & ~3u) | ((c + 1) & 3u);
     const uint32_t f = a.corner_face[c];
     return c + 1 == L.face_offsets[f + 1] ? L.face_offsets[f] : c + 1;
   }
-  uint32_t prev(uint32_t c) const {
+  [[gnu::always_inline]] uint32_t prev(uint32_t c) const {
     if (a.quads) return (c & ~3u) | ((c + 3) & 3u);
     const uint32_t f = a.corner_face[c];
     return c == L.face_offsets[f] ? L.face_offsets[f + 1] - 1 : c - 1;
+  }
+  // The corner two steps on from c in its face, which must be a quad.
+  [[gnu::always_inline]] uint32_t opposite_in_quad(uint32_t c) const {
+    if (a.quads) return (c & ~3u) | ((c + 2) & 3u);
+    const uint32_t b = L.face_offsets[a.corner_face[c]];
+    return b + ((c - b + 2) & 3u);
   }
   uint32_t other_end(uint32_t e, uint32_t v) const {
     const uint32_t x = L.edge_vertices[2 * size_t(e)];
@@ -598,18 +616,19 @@ class Rules {
     if (nfe == 2) {
       const uint32_t ca = a_.ec[k0], cb = a_.ec[k0 + 1];
       const uint32_t fa = a_.face_of(ca), fb = a_.face_of(cb);
-      const bool ta = l_.face_size(fa) == 3, tb = l_.face_size(fb) == 3;
+      // Refined levels are all quads: no face sizes to read.
+      const bool ta = !a_.quads && l_.face_size(fa) == 3, tb = !a_.quads && l_.face_size(fb) == 3;
       if (o_.smooth_triangles && (ta || tb)) {
         const double w0 = ta ? 0.470 : 0.25, w1 = tb ? 0.470 : 0.25;
         fw = 0.5 * (double(float(w0)) + double(float(w1)));
         vw = 0.5 * (1.0 - 2.0 * fw);
-      } else if (blend == 0.0 && l_.face_size(fa) == 4 && l_.face_size(fb) == 4) {
+      } else if (blend == 0.0 && (a_.quads || (l_.face_size(fa) == 4 && l_.face_size(fb) == 4))) {
         // Two quads: 3/8 on the ends, 1/16 on the far vertices of each face.
         acc_.add(a, 0.375), acc_.add(b, 0.375);
         for (uint32_t c : {ca, cb}) {
-          const uint32_t n2 = l_.next(l_.next(c));
+          const uint32_t n2 = l_.opposite_in_quad(c);
           acc_.add(P_.face_vertices[n2], 0.0625);
-          acc_.add(P_.face_vertices[l_.next(n2)], 0.0625);
+          acc_.add(P_.face_vertices[l_.prev(c)], 0.0625);
         }
         return;
       }
@@ -658,7 +677,7 @@ class Rules {
       m.add(v, (dn - 2.0) / dn + 0.25 / dn);
       for (uint32_t k = 0; k < n; ++k) m.add(l_.other_end(a_.ve[k0 + k], v), 1.5 * w);
       for (uint32_t i = 0; i < nfaces; ++i)
-        m.add(P_.face_vertices[l_.next(l_.next(a_.vc[s0 + i]))], 0.25 * w);
+        m.add(P_.face_vertices[l_.opposite_in_quad(a_.vc[s0 + i])], 0.25 * w);
       return;
     }
     m.add(v, (dn - 2.0) / dn);
@@ -683,15 +702,14 @@ class Rules {
       acc_.add(v, 1.0);
       return;
     }
-    pe_.resize(n), ce_.resize(n);
+    const float pv = P_.vertex_sharpness[v];
     int sharp_edges = 0;
-    for (uint32_t k = 0; k < n; ++k) {
-      pe_[k] = P_.edge_sharpness[a_.ve[k0 + k]];
-      sharp_edges += sharp(pe_[k]);
-    }
-    const float pv = P_.vertex_sharpness[v], cv = decrement(pv);
+    for (uint32_t k = 0; k < n; ++k) sharp_edges += sharp(P_.edge_sharpness[a_.ve[k0 + k]]);
     const Rule prule = vertex_rule(pv, sharp_edges);
     if (prule == kSmooth || prule == kDart) return smooth_vertex(v, acc_);
+    const float cv = decrement(pv);
+    pe_.resize(n), ce_.resize(n);
+    for (uint32_t k = 0; k < n; ++k) pe_[k] = P_.edge_sharpness[a_.ve[k0 + k]];
     sharp_vertex(v, prule, pe_.data(), acc_);
     child_edge_sharpness(o_, pe_.data(), int(n), ce_.data());
     int child_sharp = 0;
@@ -758,12 +776,26 @@ StencilTable build_stencils(const SubdivOptions& o, const RefinedLevel& P, const
                             const Selection& sel) {
   const size_t n = sel.points();
   StencilTable out;
-  if (n < 4 * kStencilChunk) {  // small: one serial pass, appending
-    out.offsets.reserve(n + 1);
-    out.indices.reserve(8 * n);
-    out.weights.reserve(8 * n);
+  if (n < 4 * kStencilChunk) {  // small: one serial pass, writing in place
+    // Sized up front for the usual 4-9 terms a point (grown if a level holds more) and cut to
+    // size at the end: no per-stencil append machinery.
+    out.offsets.resize(n + 1);
+    size_t used = 0, room = 7 * n + 64;
+    out.indices.resize(room), out.weights.resize(room);
     Rules rules(o, P, a, sel);
-    for (size_t i = 0; i < n; ++i) rules.point(i, out);
+    for (size_t i = 0; i < n; ++i) {
+      const size_t k = rules.compute(i);
+      if (used + k > room) {
+        room = 2 * (used + k);
+        out.indices.resize(room), out.weights.resize(room);
+      }
+      rules.write(out.indices.data() + used, out.weights.data() + used);
+      used += k;
+      if (used > UINT32_MAX)
+        throw InputError("refinement level needs more than 2^32 stencil entries");
+      out.offsets[i + 1] = uint32_t(used);
+    }
+    out.indices.resize(used), out.weights.resize(used);
     return out;
   }
   refill(out.offsets, n + 1, 0u);
