@@ -9,6 +9,8 @@
 // (one depth and --repeat 1 to read OpenSubdiv's). Runs alternate between the sides; --batched
 // runs each side's repeats in a row (each then reuses the heap its own previous run left, as a
 // long-running application would, instead of first-touching what the other side returned).
+// limn_pf / osd_pf: the median minor page faults of one build (fresh pages from the kernel; on
+// this machine's virtualised kernel each costs ~10-20 us, so they can be most of the time).
 //   limn_bench_patches [--repeat N] [--models DIR] [--depths 2,3,4,6] [--special] [--mesh PATH]
 //                      [--limn-only] [--peak] [--batched]
 #include <fmt/format.h>
@@ -69,6 +71,13 @@ OsdResult osd_build(const limn::Mesh& m, int depth, bool special) {
   return out;
 }
 
+// Minor page faults of this process so far.
+double minor_faults() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_minflt);
+}
+
 // The process's peak resident memory so far (limn runs first: a later, larger peak is
 // OpenSubdiv's).
 double peak_gb() {
@@ -113,8 +122,8 @@ int main(int argc, char** argv) {
   tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
   const char* names[] = {"quads/bigguy.obj", "quads/monsterfrog.obj", "osd/catmark_car.obj",
                          "osd/catmark_pole360.obj"};
-  fmt::print("{:<22} {:>5} {:>10} {:>10} {:>10} {:>10} {:>8}\n", "model", "depth", "limn_patch",
-             "osd_patch", "limn_ms", "osd_ms", "osd/limn");
+  fmt::print("{:<22} {:>5} {:>10} {:>10} {:>10} {:>10} {:>8} {:>8} {:>8}\n", "model", "depth",
+             "limn_patch", "osd_patch", "limn_ms", "osd_ms", "osd/limn", "limn_pf", "osd_pf");
   if (paths.empty())
     for (const char* name : names) paths.push_back(models / name);
   for (const fs::path& path : paths) {
@@ -124,23 +133,26 @@ int main(int argc, char** argv) {
     }
     const limn::Mesh m = limn::read_mesh(path);
     for (int depth : depths) {
-      std::vector<double> tl, to;
+      std::vector<double> tl, to, fl, fo;
       size_t pl = 0, po = 0;
       auto run_limn = [&] {
         limn::PatchOptions opt;
         opt.subdiv = limn::subdiv_options(m);
         opt.depth = depth;
         opt.inf_sharp_patches = opt.single_crease_patches = special;  // as the OpenSubdiv side
-        const double t0 = now_ms();
+        const double f0 = minor_faults(), t0 = now_ms();
         {
           const limn::PatchTable t = limn::build_patches(m, opt);
           tl.push_back(now_ms() - t0);
           pl = t.patch_count();
         }
+        fl.push_back(minor_faults() - f0);
         if (peak) fmt::print("  peak RSS after limn: {:.2f} GB\n", peak_gb());
       };
       auto run_osd = [&] {
+        const double f0 = minor_faults();
         const OsdResult o = osd_build(m, depth, special);
+        fo.push_back(minor_faults() - f0);
         to.push_back(o.ms);
         po = o.patches;
         if (peak) fmt::print("  peak RSS after OpenSubdiv: {:.2f} GB\n", peak_gb());
@@ -157,8 +169,9 @@ int main(int argc, char** argv) {
         }
       }
       const double ml = median(tl), mo = to.empty() ? 0.0 : median(to);
-      fmt::print("{:<22} {:>5} {:>10} {:>10} {:>10.2f} {:>10.2f} {:>7.2f}x\n",
-                 path.filename().string(), depth, pl, po, ml, mo, mo / ml);
+      fmt::print("{:<22} {:>5} {:>10} {:>10} {:>10.2f} {:>10.2f} {:>7.2f}x {:>8.0f} {:>8.0f}\n",
+                 path.filename().string(), depth, pl, po, ml, mo, mo / ml, median(fl),
+                 fo.empty() ? 0.0 : median(fo));
       std::fflush(stdout);
     }
   }

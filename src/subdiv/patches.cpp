@@ -186,7 +186,10 @@ struct Level {
   };
   std::vector<RingSlot> ring_slot;  // one per vertex, so a lookup is one cache line
   std::vector<uint32_t> ring_edge, ring_diag, ring_face;
-  mutable std::vector<uint8_t> cuts;  // cuts_at_inf_sharp per vertex: 0 unknown, 1 no, 2 yes
+  // Per vertex, what is known of it, asked once per level and again by every patch at it:
+  // kCutsKnown | kCuts (cuts_at_inf_sharp), kPlainKnown | kPlain (plain_interior).
+  mutable std::vector<uint8_t> vinfo;
+  static constexpr uint8_t kCutsKnown = 1, kCuts = 2, kPlainKnown = 4, kPlain = 8;
 };
 
 // Appends to a CSR of vertex sets (values, offsets) the sorted union of `from`'s sets of the
@@ -398,13 +401,13 @@ Builder::SharpEdges Builder::sharp_edges(const Level& L, uint32_t v) const {
 // edges (OpenSubdiv: the vertex has such edges and is not a dart).
 bool Builder::cuts_at_inf_sharp(const Level& L, const RefinedLevel& R, uint32_t v) const {
   if (!o_.inf_sharp_patches) return false;
-  if (L.cuts.empty()) L.cuts.assign(R.vertex_count(), 0);
-  if (!L.cuts[v]) {
+  uint8_t& x = L.vinfo[v];
+  if (!(x & Level::kCutsKnown)) {
     const SharpEdges e = sharp_edges(L, v);
     const bool dart = !e.boundary && e.inf + e.semi == 1 && R.vertex_sharpness[v] == 0.0f;
-    L.cuts[v] = e.inf > 0 && !dart ? 2 : 1;
+    x |= Level::kCutsKnown | (e.inf > 0 && !dart ? Level::kCuts : 0);
   }
-  return L.cuts[v] == 2;
+  return x & Level::kCuts;
 }
 
 // The fan of faces around a patch corner that a patch sees (OpenSubdiv's corner spans): the
@@ -469,7 +472,7 @@ void Builder::span(const Level& L, const RefinedLevel& R, uint32_t corner, bool&
 
 // The common regular case, told without walking the ring: four faces (refined levels are all
 // quads), none across a boundary or a torn edge, no sharpness.
-bool plain_interior(const Level& L, const RefinedLevel& R, uint32_t v) {
+bool plain_interior_walk(const Level& L, const RefinedLevel& R, uint32_t v) {
   const Topo& t = L.topo;
   if (R.vertex_sharpness[v] != 0.0f || t.vertex_offsets[v + 1] - t.vertex_offsets[v] != 4 ||
       !t.quads)
@@ -480,6 +483,15 @@ bool plain_interior(const Level& L, const RefinedLevel& R, uint32_t v) {
       return false;
   }
   return true;
+}
+
+// The same, remembered (a plain vertex has no sharp edge, so nothing cuts its ring either).
+bool plain_interior(const Level& L, const RefinedLevel& R, uint32_t v) {
+  uint8_t& x = L.vinfo[v];
+  if (!(x & Level::kPlainKnown))
+    x |= uint8_t(Level::kPlainKnown |
+                 (plain_interior_walk(L, R, v) ? Level::kPlain | Level::kCutsKnown : 0));
+  return x & Level::kPlain;
 }
 
 // Regular: the limit surface around the vertex is the B-spline of its ring (interior valence 4,
@@ -558,11 +570,7 @@ int Builder::single_crease(Level& L, const RefinedLevel& R, uint32_t f, float& s
 // rule), with nothing semi-sharp.
 bool Builder::regular_vertex_inf(Level& L, const RefinedLevel& R, uint32_t v) const {
   const Topo& t = L.topo;
-  if (plain_interior(L, R, v)) {
-    if (L.cuts.empty()) L.cuts.assign(R.vertex_count(), 0);
-    L.cuts[v] = 1;  // no sharp edge at all: nothing cuts its ring
-    return true;
-  }
+  if (plain_interior(L, R, v)) return true;
   const RingView g = ring(L, R, v);
   if (!g.manifold || !g.all_quads) return false;
   const SharpEdges e = sharp_edges(L, v);
@@ -595,6 +603,7 @@ void Builder::request(size_t k, const SparseLevel& S, const LevelAdjacency& adj,
   L.topo = make_topo(R, adj);
   const Topo& t = L.topo;
   L.corner_sharpness = {adj.corner_edge, R.edge_sharpness.data()};
+  L.vinfo.assign(nv, 0);
 
   // Depth wanted around each vertex.
   L.rem.assign(nv, 0);
@@ -728,7 +737,7 @@ void Builder::request(size_t k, const SparseLevel& S, const LevelAdjacency& adj,
   // What the next level needs stays (depths, requests, placement, sources); the rest goes.
   L.topo = {};
   L.ring_slot = {}, L.ring_edge = {}, L.ring_diag = {}, L.ring_face = {};
-  L.cuts = {};
+  L.vinfo = {};
   L.corner_sharpness = {}, L.irregular = {}, L.owned = {}, L.crease_edge = {};
   L.crease_sharpness = {}, L.force = {};
   if (k > 0) {
@@ -1022,8 +1031,8 @@ void Builder::emit(size_t k, const SparseLevel& S) {
         // Plain interior corners (valence 4, no sharpness, quads) need no cached ring: their
         // faces are reached through the twins, starting at the patch face.
         for (int i = 0; i < 4; ++i) {
-          cut[i] = cuts_at_inf_sharp(L, R, a[i]);
-          plain[i] = !cut[i] && plain_interior(L, R, a[i]);
+          plain[i] = plain_interior(L, R, a[i]);
+          cut[i] = !plain[i] && cuts_at_inf_sharp(L, R, a[i]);
           if (!cut[i] && !plain[i]) ring(L, R, a[i]);
         }
         const uint32_t* fv = R.face_vertices.data();
@@ -1132,6 +1141,9 @@ void Builder::emit(size_t k, const SparseLevel& S) {
   emit_ms_ += ms_since(t0);
 }
 
+// prune_points gives a level's spare room back only past this many bytes.
+constexpr size_t kShrinkBytes = size_t(4) << 20;
+
 // Drops the refined points no patch uses, directly or through a later level's stencils (the
 // sparse refinement makes whole rings around what it refines; on dense cages a third of its
 // points only support others' stencils one level down, or nothing). Cage points stay: they are
@@ -1173,7 +1185,11 @@ void prune_points(PatchTable& t) {
       begin = end;
     }
     s.offsets.resize(kept + 1), s.indices.resize(at), s.weights.resize(at);
-    s.offsets.shrink_to_fit(), s.indices.shrink_to_fit(), s.weights.shrink_to_fit();
+    // Giving the room back means a copy into fresh pages (the kernel's page faults cost more
+    // than the copy): only when it frees enough to matter. Region tables are copied into the
+    // merged table anyway.
+    if ((s.indices.capacity() - at) * (sizeof(uint32_t) + sizeof(float)) > kShrinkBytes)
+      s.offsets.shrink_to_fit(), s.indices.shrink_to_fit(), s.weights.shrink_to_fit();
     offsets[k + 1] = offsets[k] + kept;
   }
   for (uint32_t& p : t.regular_points) p = id[p];

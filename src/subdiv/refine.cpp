@@ -777,17 +777,18 @@ StencilTable build_stencils(const SubdivOptions& o, const RefinedLevel& P, const
   const size_t n = sel.points();
   StencilTable out;
   if (n < 4 * kStencilChunk) {  // small: one serial pass, writing in place
-    // Sized up front for the usual 4-9 terms a point (grown if a level holds more) and cut to
-    // size at the end: no per-stencil append machinery.
+    // Room reserved for the usual 4-9 terms a point (only address space: pages are touched as
+    // the size grows in small steps just ahead of the writes), and no per-stencil append.
     out.offsets.resize(n + 1);
-    size_t used = 0, room = 7 * n + 64;
-    out.indices.resize(room), out.weights.resize(room);
+    out.indices.reserve(7 * n + 64), out.weights.reserve(7 * n + 64);
+    constexpr size_t kStep = 4096;
+    size_t used = 0;
     Rules rules(o, P, a, sel);
     for (size_t i = 0; i < n; ++i) {
       const size_t k = rules.compute(i);
-      if (used + k > room) {
-        room = 2 * (used + k);
-        out.indices.resize(room), out.weights.resize(room);
+      if (used + k > out.indices.size()) {
+        const size_t size = std::max(used + k, out.indices.size() + kStep);
+        out.indices.resize(size), out.weights.resize(size);
       }
       rules.write(out.indices.data() + used, out.weights.data() + used);
       used += k;
