@@ -299,6 +299,7 @@ class Builder {
   // Filled level by level as the refinement runs (each level's patches are emitted as soon as
   // its requests are known, then its walking data is dropped).
   void emit(size_t k, const SparseLevel& S);
+  void reserve_output(size_t k, const Level& L, const RefinedLevel& R);
   PatchTable out_;
   PatchStats* stats_ = nullptr;
   double emit_ms_ = 0;
@@ -942,6 +943,38 @@ void GregoryCap::compute() {
   for (int i = 0; i < 4; ++i) face_points(i);
 }
 
+// Room in the table's arrays for this level's patches and, judging by this level, the levels
+// still to come (FAS emits about as many patches per level below the first): the arrays grow
+// once or twice instead of doubling level after level, and each doubling is a copy into fresh
+// pages. Over-estimates only reserve address space; pages are touched as they are written.
+void Builder::reserve_output(size_t k, const Level& L, const RefinedLevel& R) {
+  size_t regular = 0, caps = 0;
+  for (uint32_t f = 0; f < R.face_count(); ++f) {
+    if (!L.owned[f] || (L.requested[f] && !h_) || (!L.role.empty() && L.role[f] < 2)) continue;
+    const uint32_t b = R.face_offsets[f];
+    if (R.face_offsets[f + 1] - b != 4 || L.force[f]) continue;
+    bool reg = L.crease_edge[f] >= 0;
+    if (!reg) {
+      reg = true;
+      for (uint32_t c = b; c < b + 4; ++c) reg = reg && !L.irregular[R.face_vertices[c]];
+    }
+    ++(reg ? regular : caps);
+  }
+  const size_t levels = k == 0 ? 1 : size_t(std::max(1, o_.depth + 1 - int(k)));
+  auto room = [](auto& v, size_t more) {
+    if (v.capacity() < v.size() + more) v.reserve(v.size() + more + more / 8);
+  };
+  PatchTable& out = out_;
+  room(out.regular_points, 16 * regular * levels);
+  room(out.regular_params, regular * levels);
+  room(out.gregory_points, 20 * caps);
+  room(out.gregory_params, caps);
+  StencilTable& g = out.gregory_stencils;
+  const size_t per_cap = g.size() ? 20 * g.indices.size() / g.size() : 160;
+  room(g.offsets, 20 * caps);
+  room(g.indices, per_cap * caps), room(g.weights, per_cap * caps);
+}
+
 void Builder::emit(size_t k, const SparseLevel& S) {
   const auto t0 = std::chrono::steady_clock::now();
   PatchTable& out = out_;
@@ -988,6 +1021,7 @@ void Builder::emit(size_t k, const SparseLevel& S) {
         }
       }
     }
+    reserve_output(k, L, R);
     for (uint32_t f = 0; f < R.face_count(); ++f) {
       if (!L.owned[f] || (L.requested[f] && !h_) || (!L.role.empty() && L.role[f] < 2)) continue;
       if (R.face_offsets[f + 1] - R.face_offsets[f] != 4 || L.force[f]) {
