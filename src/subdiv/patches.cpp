@@ -12,6 +12,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <memory>
@@ -47,31 +48,53 @@ std::vector<uint32_t> ptex_offsets(const Mesh& cage) {
 
 // A linear combination of an end cap's points: dense over the cap's support (the ids of its four
 // corners and their rings), so adding a term is two lookups (the point's slot in the support,
-// from a map by point id), combining rows is a dense axpy, and emitting walks the support.
+// from a map by point id), combining rows is a dense axpy, and emitting walks the support. A row
+// touches a few of the support's slots (7 of ~35 on average): up to 64 slots, a mask of the
+// touched ones lets combining and emitting visit only those, in the same (support) order.
 struct Terms {
   const std::vector<uint32_t>* ids = nullptr;
   const uint32_t* slot = nullptr;  // slot[p - base]: p's place in ids (valid for ids only)
   uint32_t base = 0, span = 0;
   std::vector<double> w;
+  uint64_t touched = 0;  // bit s: slot s may be non-zero (all slots when the support is wide)
+  bool wide = false;     // more than 64 slots: no mask
   void reset(const std::vector<uint32_t>& support, const uint32_t* slots, uint32_t first,
              uint32_t count) {
     ids = &support, slot = slots, base = first, span = count;
     w.assign(support.size(), 0.0);
+    touched = 0, wide = support.size() > 64;
   }
   void add(uint32_t p, double x) {
     const uint32_t s = p - base < span ? slot[p - base] : kNone;
     if (s >= ids->size() || (*ids)[s] != p)
       throw std::logic_error("patches: end-cap point off support");
     w[s] += x;
+    if (!wide) touched |= uint64_t(1) << s;
   }
   void add(const Terms& o, double s) {
-    for (size_t i = 0; i < w.size(); ++i) w[i] += o.w[i] * s;
+    if (wide) {
+      for (size_t i = 0; i < w.size(); ++i) w[i] += o.w[i] * s;
+      return;
+    }
+    for (uint64_t m = o.touched; m; m &= m - 1) {
+      const int i = std::countr_zero(m);
+      w[size_t(i)] += o.w[size_t(i)] * s;
+    }
+    touched |= o.touched;
   }
   // Writes the row's non-zero terms to idx/weight (room for the whole support); returns how
   // many.
   size_t emit(uint32_t* idx, float* weight) const {
     size_t n = 0;
-    for (size_t i = 0; i < w.size(); ++i) {
+    if (wide) {
+      for (size_t i = 0; i < w.size(); ++i) {
+        idx[n] = (*ids)[i], weight[n] = float(w[i]);
+        n += w[i] != 0.0;
+      }
+      return n;
+    }
+    for (uint64_t m = touched; m; m &= m - 1) {
+      const size_t i = size_t(std::countr_zero(m));
       idx[n] = (*ids)[i], weight[n] = float(w[i]);
       n += w[i] != 0.0;
     }
