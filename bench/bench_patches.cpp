@@ -9,19 +9,29 @@
 // (one depth and --repeat 1 to read OpenSubdiv's). Runs alternate between the sides; --batched
 // runs each side's repeats in a row (each then reuses the heap its own previous run left, as a
 // long-running application would, instead of first-touching what the other side returned).
+// --keep-heap: glibc keeps freed memory (no trimming, no mmap below 32 MB), so neither side pays
+// the kernel for fresh pages after the first runs: what a long-running application with a
+// caching allocator sees, and the compute-only comparison.
+// limn_MB / osd_MB: the peak heap of one build (bytes held through operator new at once, the
+// result included), counted by this program's own operator new.
 // limn_pf / osd_pf: the median minor page faults of one build (fresh pages from the kernel; on
 // this machine's virtualised kernel each costs ~10-20 us, so they can be most of the time).
 //   limn_bench_patches [--repeat N] [--models DIR] [--depths 2,3,4,6] [--special] [--mesh PATH]
-//                      [--limn-only] [--peak] [--batched]
+//                      [--limn-only] [--peak] [--batched] [--keep-heap]
 #include <fmt/format.h>
 #include <tbb/global_control.h>
 
+#include <malloc.h>
 #include <sys/resource.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
+#include <climits>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -35,7 +45,36 @@ using limn::bench::median;
 using limn::bench::now_ms;
 namespace fs = std::filesystem;
 
+// Heap accounting: every allocation through operator new, so both libraries' peaks are counted
+// the same way (sizes as malloc rounds them).
+std::atomic<size_t> g_heap_now{0}, g_heap_peak{0};
+
+void* counted_alloc(size_t n) {
+  void* p = std::malloc(n ? n : 1);
+  if (!p) throw std::bad_alloc();
+  const size_t now = g_heap_now += malloc_usable_size(p);
+  size_t peak = g_heap_peak.load();
+  while (now > peak && !g_heap_peak.compare_exchange_weak(peak, now)) {
+  }
+  return p;
+}
+
+void counted_free(void* p) noexcept {
+  if (!p) return;
+  g_heap_now -= malloc_usable_size(p);
+  std::free(p);
+}
+
 namespace {
+
+// Peak heap of what `f` allocates beyond what is already held, in MB.
+template <class F>
+double heap_peak_mb(F&& f) {
+  const size_t base = g_heap_now.load();
+  g_heap_peak = base;
+  f();
+  return double(g_heap_peak.load() - base) / 1e6;
+}
 
 struct OsdResult {
   size_t patches = 0;
@@ -88,6 +127,25 @@ double peak_gb() {
 
 }  // namespace
 
+void* operator new(size_t n) {
+  return counted_alloc(n);
+}
+void* operator new[](size_t n) {
+  return counted_alloc(n);
+}
+void operator delete(void* p) noexcept {
+  counted_free(p);
+}
+void operator delete[](void* p) noexcept {
+  counted_free(p);
+}
+void operator delete(void* p, size_t) noexcept {
+  counted_free(p);
+}
+void operator delete[](void* p, size_t) noexcept {
+  counted_free(p);
+}
+
 int main(int argc, char** argv) {
   int repeat = 3;
   bool special = false;
@@ -108,6 +166,8 @@ int main(int argc, char** argv) {
       batched = true;
     else if (!std::strcmp(argv[i], "--peak"))
       peak = true;
+    else if (!std::strcmp(argv[i], "--keep-heap"))
+      mallopt(M_TRIM_THRESHOLD, INT_MAX), mallopt(M_MMAP_THRESHOLD, 32 << 20);
     else if (!std::strcmp(argv[i], "--special"))
       special = true;
     else if (!std::strcmp(argv[i], "--depths") && i + 1 < argc) {
@@ -122,8 +182,9 @@ int main(int argc, char** argv) {
   tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
   const char* names[] = {"quads/bigguy.obj", "quads/monsterfrog.obj", "osd/catmark_car.obj",
                          "osd/catmark_pole360.obj"};
-  fmt::print("{:<22} {:>5} {:>10} {:>10} {:>10} {:>10} {:>8} {:>8} {:>8}\n", "model", "depth",
-             "limn_patch", "osd_patch", "limn_ms", "osd_ms", "osd/limn", "limn_pf", "osd_pf");
+  fmt::print("{:<22} {:>5} {:>10} {:>10} {:>10} {:>10} {:>8} {:>8} {:>8} {:>8} {:>8}\n", "model",
+             "depth", "limn_patch", "osd_patch", "limn_ms", "osd_ms", "osd/limn", "limn_MB",
+             "osd_MB", "limn_pf", "osd_pf");
   if (paths.empty())
     for (const char* name : names) paths.push_back(models / name);
   for (const fs::path& path : paths) {
@@ -135,23 +196,25 @@ int main(int argc, char** argv) {
     for (int depth : depths) {
       std::vector<double> tl, to, fl, fo;
       size_t pl = 0, po = 0;
+      double hl = 0, ho = 0;  // peak heap MB (the same every run)
       auto run_limn = [&] {
         limn::PatchOptions opt;
         opt.subdiv = limn::subdiv_options(m);
         opt.depth = depth;
         opt.inf_sharp_patches = opt.single_crease_patches = special;  // as the OpenSubdiv side
         const double f0 = minor_faults(), t0 = now_ms();
-        {
+        hl = heap_peak_mb([&] {
           const limn::PatchTable t = limn::build_patches(m, opt);
           tl.push_back(now_ms() - t0);
           pl = t.patch_count();
-        }
+        });
         fl.push_back(minor_faults() - f0);
         if (peak) fmt::print("  peak RSS after limn: {:.2f} GB\n", peak_gb());
       };
       auto run_osd = [&] {
         const double f0 = minor_faults();
-        const OsdResult o = osd_build(m, depth, special);
+        OsdResult o;
+        ho = heap_peak_mb([&] { o = osd_build(m, depth, special); });
         fo.push_back(minor_faults() - f0);
         to.push_back(o.ms);
         po = o.patches;
@@ -169,9 +232,11 @@ int main(int argc, char** argv) {
         }
       }
       const double ml = median(tl), mo = to.empty() ? 0.0 : median(to);
-      fmt::print("{:<22} {:>5} {:>10} {:>10} {:>10.2f} {:>10.2f} {:>7.2f}x {:>8.0f} {:>8.0f}\n",
-                 path.filename().string(), depth, pl, po, ml, mo, mo / ml, median(fl),
-                 fo.empty() ? 0.0 : median(fo));
+      fmt::print(
+          "{:<22} {:>5} {:>10} {:>10} {:>10.2f} {:>10.2f} {:>7.2f}x {:>8.2f} {:>8.2f} {:>8.0f} "
+          "{:>8.0f}\n",
+          path.filename().string(), depth, pl, po, ml, mo, mo / ml, hl, ho, median(fl),
+          fo.empty() ? 0.0 : median(fo));
       std::fflush(stdout);
     }
   }
