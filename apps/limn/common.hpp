@@ -16,6 +16,7 @@ void add_convert(CLI::App& app);
 void add_shape(CLI::App& app);
 void add_demo(CLI::App& app);
 void add_subdivide(CLI::App& app);
+void add_simplify(CLI::App& app);
 
 /// Milliseconds since construction.
 class Stopwatch {

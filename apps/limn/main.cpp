@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   limn::cli::add_convert(app);
   limn::cli::add_shape(app);
   limn::cli::add_subdivide(app);
+  limn::cli::add_simplify(app);
   limn::cli::add_demo(app);
   try {
     app.parse(argc, argv);

@@ -1,0 +1,99 @@
+// limn simplify: the local greedy optimiser of Jin, Wu, Liu (sec. 3.2-3.3).
+//
+// For a cluster-boundary edge between T_m in C_k and T_n in C_l there are three states: as is,
+// T_n moved into C_k, or T_m moved into C_l. S_k + S_l is the same in all three, so the best is
+// the one with the largest |N_k| + |N_l|; a move is taken only when it lowers E. A move that would
+// empty or disconnect the face's cluster is refused. Work is driven by a queue of edges: a move
+// queues the edges around the moved face, and when the queue runs dry only the boundary edges of
+// clusters whose sums changed since the edge was last looked at are queued again, so quiet
+// regions are never swept. It stops when no boundary edge has a move that lowers E: a local
+// minimum of E over single-face boundary moves.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <utility>
+#include <vector>
+
+#include "limn/simplify/partition.hpp"
+
+namespace limn {
+
+struct GreedyOptions {
+  /// A move is taken only when |N_k| + |N_l| grows by more than this times the moved face's area
+  /// (so round-off cannot make two states alternate forever).
+  double min_gain = 1e-10;
+  /// Faces a connectivity check may visit when the O(1) test around the face is not conclusive;
+  /// beyond it the move is refused (never risking a disconnected cluster).
+  uint32_t search_budget = 32;
+  /// Debug hook, called after every accepted move with the face, its old and new cluster and the
+  /// predicted drop of E (squared model units). Tests use it to check every move lowers E.
+  std::function<void(uint32_t face, uint32_t from, uint32_t to, double drop)> on_move;
+};
+
+struct GreedyStats {
+  size_t moves = 0;               ///< accepted moves
+  size_t evaluations = 0;         ///< boundary edges scored
+  size_t rounds = 0;              ///< times the queue ran dry and stale edges were queued again
+  size_t local_checks = 0;        ///< connectivity decided by looking around the face (O(1))
+  size_t search_checks = 0;       ///< connectivity decided by a bounded search
+  size_t refused_disconnect = 0;  ///< improving moves refused: they would split a cluster
+  size_t refused_budget = 0;      ///< improving moves refused: the search ran out of budget
+  double energy_before = 0, energy_after = 0;
+};
+
+/// Greedy optimiser state over a partition: the boundary-edge list, the queue and the
+/// per-edge and per-cluster stamps that tell which edges are stale. The partition is referenced,
+/// not copied; callers may relabel faces between runs and report them with `touch`.
+class GreedyOptimizer {
+ public:
+  /// Precondition: every face is assigned and every cluster edge-connected. Queues every
+  /// boundary edge. O(corners).
+  GreedyOptimizer(const VsaSurface& s, Partition& p, GreedyOptions options = {});
+
+  /// Runs until no boundary move lowers E. Time about O(boundary edges x rounds + moves).
+  GreedyStats run();
+
+  /// The pair of edge-adjacent clusters, neither of them `exclude`, whose merge would raise E
+  /// least (merge_cost); {kNone, kNone} when there is none. O(boundary edges).
+  std::pair<uint32_t, uint32_t> cheapest_merge(uint32_t exclude, double* cost);
+
+  /// Tells the optimiser that these faces changed cluster outside it (e.g. a split): queues their
+  /// edges and marks their clusters changed. O(faces given).
+  void touch(std::span<const uint32_t> faces);
+
+ private:
+  bool boundary(uint32_t c) const;
+  void push(uint32_t c);
+  void evaluate(uint32_t c);
+  double gain(uint32_t f, uint32_t to) const;
+  bool removable(uint32_t f);
+  bool fan_in_cluster(uint32_t from_corner, uint32_t to_corner, uint32_t l) const;
+  bool search_connected(uint32_t f, uint32_t l, std::span<const uint32_t> targets);
+  void apply(uint32_t f, uint32_t to, double drop);
+  void grow_clusters();
+
+  const VsaSurface& s_;
+  Partition& p_;
+  GreedyOptions o_;
+  GreedyStats st_;
+  std::vector<uint32_t> queue_;  // corners; FIFO from head_
+  size_t head_ = 0;
+  std::vector<uint32_t> list_;            // corners of (once) boundary edges, compacted per round
+  std::vector<uint8_t> queued_, listed_;  // per edge
+  std::vector<uint32_t> edge_stamp_;      // per edge: clock when last scored
+  std::vector<uint32_t> cluster_stamp_;   // per cluster: clock of its last change
+  uint32_t clock_ = 1;
+  std::vector<uint32_t> visit_;  // per face: search generation
+  std::vector<uint8_t> owner_;   // per face: the search wave that reached it
+  uint32_t generation_ = 0;
+  std::vector<std::vector<uint32_t>> waves_;
+  std::vector<size_t> heads_;
+  std::vector<uint8_t> parent_;
+};
+
+/// Convenience: builds an optimiser and runs it once.
+GreedyStats greedy_optimize(const VsaSurface& s, Partition& p, const GreedyOptions& options = {});
+
+}  // namespace limn

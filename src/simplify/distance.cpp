@@ -1,0 +1,229 @@
+// Surface-to-surface distances through Embree point queries.
+#include "limn/simplify/distance.hpp"
+
+#include <embree3/rtcore.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <stdexcept>
+#include <vector>
+
+namespace limn {
+
+namespace {
+
+struct P3 {
+  double x, y, z;
+};
+P3 operator-(P3 a, P3 b) {
+  return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
+P3 operator+(P3 a, P3 b) {
+  return {a.x + b.x, a.y + b.y, a.z + b.z};
+}
+P3 operator*(double s, P3 a) {
+  return {s * a.x, s * a.y, s * a.z};
+}
+double dot(P3 a, P3 b) {
+  return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+
+// Closest point on triangle abc to p, by the Voronoi regions of its vertices, edges and face
+// (Ericson, Real-Time Collision Detection, sec. 5.1.5).
+P3 closest_on_triangle(P3 p, P3 a, P3 b, P3 c) {
+  const P3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const P3 bp = p - b;
+  const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + (d1 / (d1 - d3)) * ab;
+  const P3 cp = p - c;
+  const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + (d2 / (d2 - d6)) * ac;
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
+    return b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b);
+  const double den = va + vb + vc;
+  if (!(den > 0)) {
+    // Degenerate triangle: the nearest of its three edges' end points will do.
+    const double da = dot(ap, ap), db = dot(bp, bp), dc = dot(cp, cp);
+    return da <= db && da <= dc ? a : db <= dc ? b : c;
+  }
+  const double v = vb / den, w = vc / den;
+  return a + v * ab + w * ac;
+}
+
+// A BVH over a mesh's faces (fanned into triangles) for closest-point queries.
+class ClosestPoint {
+ public:
+  explicit ClosestPoint(const Mesh& m) : m_(m) {
+    for (size_t f = 0; f < m.face_count(); ++f) {
+      const auto v = m.face(f);
+      for (size_t i = 1; i + 1 < v.size(); ++i) tris_.insert(tris_.end(), {v[0], v[i], v[i + 1]});
+    }
+    device_ = rtcNewDevice(nullptr);
+    if (!device_) throw std::runtime_error("Embree: cannot create a device");
+    scene_ = rtcNewScene(device_);
+    RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+    float* vb = static_cast<float*>(rtcSetNewGeometryBuffer(
+        g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), m.vertex_count()));
+    std::copy(m.positions.begin(), m.positions.end(), vb);
+    unsigned* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+        g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), tris_.size() / 3));
+    std::copy(tris_.begin(), tris_.end(), ib);
+    rtcCommitGeometry(g);
+    rtcAttachGeometry(scene_, g);
+    rtcReleaseGeometry(g);
+    rtcCommitScene(scene_);
+  }
+  ~ClosestPoint() {
+    rtcReleaseScene(scene_);
+    rtcReleaseDevice(device_);
+  }
+  ClosestPoint(const ClosestPoint&) = delete;
+  ClosestPoint& operator=(const ClosestPoint&) = delete;
+
+  // Distance from p to the mesh. Thread-safe.
+  double distance(P3 p) const {
+    Query q{this, p, std::numeric_limits<double>::infinity()};
+    RTCPointQuery pq;
+    pq.x = static_cast<float>(p.x), pq.y = static_cast<float>(p.y), pq.z = static_cast<float>(p.z);
+    pq.time = 0;
+    pq.radius = std::numeric_limits<float>::infinity();
+    RTCPointQueryContext ctx;
+    rtcInitPointQueryContext(&ctx);
+    rtcPointQuery(scene_, &pq, &ctx, &ClosestPoint::callback, &q);
+    return q.best;
+  }
+
+ private:
+  struct Query {
+    const ClosestPoint* self;
+    P3 p;
+    double best;
+  };
+  P3 vertex(uint32_t v) const {
+    const float* x = &m_.positions[3 * size_t(v)];
+    return {x[0], x[1], x[2]};
+  }
+  static bool callback(RTCPointQueryFunctionArguments* args) {
+    Query* q = static_cast<Query*>(args->userPtr);
+    const uint32_t* t = &q->self->tris_[3 * size_t(args->primID)];
+    const P3 c = closest_on_triangle(q->p, q->self->vertex(t[0]), q->self->vertex(t[1]),
+                                     q->self->vertex(t[2]));
+    const P3 d = q->p - c;
+    const double dist = std::sqrt(dot(d, d));
+    if (dist < q->best) {
+      q->best = dist;
+      // Embree's radius is float; round up so the true closest triangle is never culled.
+      args->query->radius = std::nextafter(static_cast<float>(dist), INFINITY);
+      return true;
+    }
+    return false;
+  }
+
+  const Mesh& m_;
+  std::vector<uint32_t> tris_;
+  RTCDevice device_ = nullptr;
+  RTCScene scene_ = nullptr;
+};
+
+struct Acc {
+  double max = 0, sum2 = 0;
+};
+
+template <class PointAt>
+Acc measure(const ClosestPoint& cp, size_t n, PointAt&& point_at) {
+  return tbb::parallel_reduce(
+      tbb::blocked_range<size_t>(0, n, 1024), Acc{},
+      [&](const tbb::blocked_range<size_t>& r, Acc a) {
+        for (size_t i = r.begin(); i < r.end(); ++i) {
+          const double d = cp.distance(point_at(i));
+          a.max = std::max(a.max, d);
+          a.sum2 += d * d;
+        }
+        return a;
+      },
+      [](Acc a, Acc b) {
+        return Acc{std::max(a.max, b.max), a.sum2 + b.sum2};
+      });
+}
+
+}  // namespace
+
+SurfaceDistance surface_distance(const Mesh& simplified, const Mesh& reference, size_t samples,
+                                 uint64_t seed) {
+  SurfaceDistance r;
+  const double diag = bounding_box(reference).diagonal();
+  if (simplified.face_count() == 0 || reference.face_count() == 0 || !(diag > 0)) return r;
+  // Area-uniform samples on the simplified surface: systematic positions along the cumulative
+  // area of its (fanned) triangles, uniform within each triangle.
+  std::vector<uint32_t> tris;
+  std::vector<double> cum;
+  double total = 0;
+  auto P = [&](uint32_t v) {
+    const float* x = &simplified.positions[3 * size_t(v)];
+    return P3{x[0], x[1], x[2]};
+  };
+  for (size_t f = 0; f < simplified.face_count(); ++f) {
+    const auto v = simplified.face(f);
+    for (size_t i = 1; i + 1 < v.size(); ++i) {
+      const P3 a = P(v[0]), b = P(v[i]), c = P(v[i + 1]);
+      const P3 u = b - a, w = c - a;
+      const P3 x{u.y * w.z - u.z * w.y, u.z * w.x - u.x * w.z, u.x * w.y - u.y * w.x};
+      total += 0.5 * std::sqrt(dot(x, x));
+      tris.insert(tris.end(), {v[0], v[i], v[i + 1]});
+      cum.push_back(total);
+    }
+  }
+  std::vector<P3> pts;
+  pts.reserve(samples + simplified.vertex_count());
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  for (size_t i = 0; i < samples && total > 0; ++i) {
+    const double at = (double(i) + 0.5) / double(samples) * total;
+    const size_t t = std::min<size_t>(
+        size_t(std::lower_bound(cum.begin(), cum.end(), at) - cum.begin()), cum.size() - 1);
+    double u = uni(rng), v = uni(rng);
+    if (u + v > 1) u = 1 - u, v = 1 - v;
+    const P3 a = P(tris[3 * t]), b = P(tris[3 * t + 1]), c = P(tris[3 * t + 2]);
+    pts.push_back(a + u * (b - a) + v * (c - a));
+  }
+  const size_t area_samples = pts.size();
+  for (size_t v = 0; v < simplified.vertex_count(); ++v) pts.push_back(P(uint32_t(v)));
+
+  {
+    const ClosestPoint to_ref(reference);
+    const Acc area = measure(to_ref, area_samples, [&](size_t i) { return pts[i]; });
+    const Acc verts =
+        measure(to_ref, pts.size() - area_samples, [&](size_t i) { return pts[area_samples + i]; });
+    r.max_to_reference = std::max(area.max, verts.max) / diag;
+    r.rms_to_reference = area_samples ? std::sqrt(area.sum2 / double(area_samples)) / diag : 0;
+  }
+  {
+    std::vector<uint8_t> used(reference.vertex_count(), 0);
+    for (uint32_t v : reference.face_vertices) used[v] = 1;
+    std::vector<P3> rv;
+    for (size_t v = 0; v < reference.vertex_count(); ++v)
+      if (used[v]) {
+        const float* x = &reference.positions[3 * v];
+        rv.push_back({x[0], x[1], x[2]});
+      }
+    const ClosestPoint to_simplified(simplified);
+    const Acc back = measure(to_simplified, rv.size(), [&](size_t i) { return rv[i]; });
+    r.max_from_reference = back.max / diag;
+  }
+  r.hausdorff = std::max(r.max_to_reference, r.max_from_reference);
+  r.samples = area_samples;
+  return r;
+}
+
+}  // namespace limn

@@ -1,0 +1,121 @@
+// The VSA pipeline: seeding, optimisation with splits up to K or an error target, meshing.
+#include "limn/simplify/vsa.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <utility>
+
+namespace limn {
+
+namespace {
+
+double now_ms() {
+  return std::chrono::duration<double, std::milli>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+void add(GreedyStats& a, const GreedyStats& b) {
+  if (a.moves == 0 && a.evaluations == 0) a.energy_before = b.energy_before;
+  a.moves += b.moves, a.evaluations += b.evaluations, a.rounds += b.rounds;
+  a.local_checks += b.local_checks, a.search_checks += b.search_checks;
+  a.refused_disconnect += b.refused_disconnect, a.refused_budget += b.refused_budget;
+  a.energy_after = b.energy_after;
+}
+
+}  // namespace
+
+Partition vsa_partition(const VsaSurface& s, const VsaOptions& options, VsaStats* stats) {
+  VsaStats st;
+  double t = now_ms();
+  SeedingOptions so = options.seeding;
+  so.clusters = std::max<size_t>(1, options.proxies);
+  Partition p = seed_partition(s, so, &st.seeding);
+  st.seeded = p.cluster_count();
+  st.component_clusters = absorb_unassigned(s, p);
+  st.seeding_ms = now_ms() - t;
+  t = now_ms();
+
+  const size_t K = std::min(so.clusters, s.face_count());
+  const size_t cap =
+      options.max_proxies ? options.max_proxies : std::max<size_t>(K, s.face_count() / 3);
+  auto want_more = [&] {
+    if (options.target_error > 0)
+      return p.cluster_count() < cap && p.energy() > options.target_error * s.total_area;
+    return options.fill && p.cluster_count() < K;
+  };
+  std::vector<uint32_t> touched;
+  if (options.method == VsaMethod::greedy) {
+    GreedyOptimizer g(s, p, options.greedy);
+    add(st.greedy, g.run());
+    while (want_more()) {
+      const uint32_t k = worst_cluster(p);
+      if (k == kNone || p.cluster_energy(k) <= 0) break;
+      split_cluster(s, p, k, &touched);
+      ++st.split_clusters;
+      g.touch(touched);
+      add(st.greedy, g.run());
+    }
+    std::vector<uint32_t> merged;
+    for (size_t tp = 0; tp < options.teleports; ++tp) {
+      const uint32_t w = worst_cluster(p);
+      double cost = 0;
+      const auto [a, b] = w == kNone ? std::pair{kNone, kNone} : g.cheapest_merge(w, &cost);
+      if (a == kNone) break;
+      const double before = p.cluster_energy(w);
+      const uint32_t w2 = split_cluster(s, p, w, &touched);
+      const double gain = before - p.cluster_energy(w) - p.cluster_energy(w2);
+      if (!(gain > cost + 1e-12 * before)) {
+        merge_clusters(s, p, w, w2);
+        pop_empty_cluster(p);
+        break;
+      }
+      // b joins a; the new half of w takes b's id, so ids stay 0..K-1.
+      merge_clusters(s, p, a, b, &merged);
+      touched.insert(touched.end(), merged.begin(), merged.end());
+      merge_clusters(s, p, b, w2);
+      pop_empty_cluster(p);
+      ++st.teleports;
+      g.touch(touched);
+      add(st.greedy, g.run());
+    }
+  } else {
+    for (;;) {
+      while (want_more()) {
+        const uint32_t k = worst_cluster(p);
+        if (k == kNone || p.cluster_energy(k) <= 0) break;
+        split_cluster(s, p, k, &touched);
+        ++st.split_clusters;
+      }
+      const LloydStats ls = lloyd_optimize(s, p, options.lloyd);
+      st.lloyd.iterations += ls.iterations;
+      st.lloyd.energy.insert(st.lloyd.energy.end(), ls.energy.begin(), ls.energy.end());
+      if (!(options.target_error > 0) || !want_more()) break;
+    }
+  }
+  p.recompute(s);
+  st.optimise_ms = now_ms() - t;
+  st.clusters = p.cluster_count();
+  st.energy = p.energy();
+  st.total_area = s.total_area;
+  if (stats) *stats = st;
+  return p;
+}
+
+VsaResult simplify_vsa(const Mesh& mesh, const VsaOptions& options, std::string_view name) {
+  VsaResult r;
+  double t = now_ms();
+  const VsaSurface s = prepare_surface(mesh, name);
+  const double prepare = now_ms() - t;
+  Partition p = vsa_partition(s, options, &r.stats);
+  r.stats.prepare_ms = prepare;
+  t = now_ms();
+  r.output = polygonize(s, p, options.meshing);
+  r.stats.meshing_ms = now_ms() - t;
+  r.stats.clusters = p.cluster_count();
+  r.stats.energy = p.energy();
+  r.labels = std::move(p.label);
+  return r;
+}
+
+}  // namespace limn
