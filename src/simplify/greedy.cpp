@@ -48,7 +48,14 @@ GreedyOptimizer::GreedyOptimizer(const VsaSurface& s, Partition& p, GreedyOption
 }
 
 void GreedyOptimizer::grow_clusters() {
-  if (cluster_stamp_.size() < p_.cluster_count()) cluster_stamp_.resize(p_.cluster_count(), 0);
+  const size_t K = p_.cluster_count();
+  if (cluster_stamp_.size() >= K) return;
+  const size_t old = cluster_stamp_.size();
+  cluster_stamp_.resize(K, 0);
+  checked_at_.resize(K, 0);
+  stale_.resize(K, 0);
+  checked_normal_.resize(3 * K, 0.0);
+  for (size_t k = old; k < K; ++k) p_.proxy_normal(uint32_t(k), &checked_normal_[3 * k]);
 }
 
 bool GreedyOptimizer::boundary(uint32_t c) const {
@@ -69,6 +76,8 @@ void GreedyOptimizer::touch(std::span<const uint32_t> faces) {
   const Mesh& m = *s_.mesh;
   for (uint32_t f : faces) {
     cluster_stamp_[p_.label[f]] = clock_;
+    // Relabelled from outside: a large change, whatever its normal says.
+    checked_normal_[3 * size_t(p_.label[f])] = 2.0;
     for (uint32_t c = m.face_offsets[f]; c < m.face_offsets[f + 1]; ++c) {
       const uint32_t t = s_.topo.corner_twin[c];
       if (t == kNone) continue;
@@ -218,6 +227,7 @@ void GreedyOptimizer::apply(uint32_t f, uint32_t to, double drop) {
   ++clock_;
   cluster_stamp_[from] = cluster_stamp_[to] = clock_;
   ++st_.moves;
+  if (journaling_) journal_.push_back({f, from});
   if (o_.on_move) o_.on_move(f, from, to, drop);
   // The moved face's edges changed state; its neighbours' own moves may have become possible.
   const Mesh& m = *s_.mesh;
@@ -270,8 +280,26 @@ GreedyStats GreedyOptimizer::run() {
     }
     queue_.clear();
     head_ = 0;
-    // Queue again the boundary edges whose clusters changed after they were last scored; drop
-    // edges that are no longer on a boundary from the list.
+    // Clusters whose proxy normal turned by more than the drift tolerance since their boundary
+    // was last queued whole are stale: their boundary edges scored before the change are queued
+    // again. Nothing stale: done, without touching the list.
+    bool any = false;
+    for (uint32_t k = 0; k < p_.cluster_count(); ++k) {
+      stale_[k] = 0;
+      if (cluster_stamp_[k] <= checked_at_[k]) continue;
+      double n[3];
+      p_.proxy_normal(k, n);
+      double* r = &checked_normal_[3 * size_t(k)];
+      const double d2 = (n[0] - r[0]) * (n[0] - r[0]) + (n[1] - r[1]) * (n[1] - r[1]) +
+                        (n[2] - r[2]) * (n[2] - r[2]);
+      if (d2 <= o_.drift * o_.drift && o_.drift > 0) continue;
+      stale_[k] = 1;
+      any = true;
+      checked_at_[k] = clock_;
+      r[0] = n[0], r[1] = n[1], r[2] = n[2];
+    }
+    if (!any) break;
+    // Drop edges that are no longer on a boundary from the list on the way.
     size_t w = 0;
     for (size_t i = 0; i < list_.size(); ++i) {
       const uint32_t c = list_[i];
@@ -283,7 +311,9 @@ GreedyStats GreedyOptimizer::run() {
       list_[w++] = c;
       const uint32_t k = p_.label[s_.topo.corner_face[c]];
       const uint32_t l = p_.label[s_.topo.corner_face[s_.topo.corner_twin[c]]];
-      if (std::max(cluster_stamp_[k], cluster_stamp_[l]) > edge_stamp_[e]) push(c);
+      if ((stale_[k] || stale_[l]) &&
+          std::max(cluster_stamp_[k], cluster_stamp_[l]) > edge_stamp_[e])
+        push(c);
     }
     list_.resize(w);
     if (queue_.empty()) break;
@@ -291,6 +321,29 @@ GreedyStats GreedyOptimizer::run() {
   }
   st_.energy_after = p_.energy();
   return st_;
+}
+
+void GreedyOptimizer::begin_journal() {
+  journaling_ = true;
+  journal_.clear();
+}
+
+void GreedyOptimizer::end_journal() {
+  journaling_ = false;
+  journal_.clear();
+}
+
+void GreedyOptimizer::rollback() {
+  journaling_ = false;
+  std::vector<uint32_t> faces;
+  faces.reserve(journal_.size());
+  for (size_t i = journal_.size(); i-- > 0;) {
+    const auto [f, from] = journal_[i];
+    p_.move(s_, f, from);
+    faces.push_back(f);
+  }
+  journal_.clear();
+  touch(faces);
 }
 
 std::pair<uint32_t, uint32_t> GreedyOptimizer::cheapest_merge(uint32_t exclude, double* cost) {

@@ -46,7 +46,9 @@ Partition vsa_partition(const VsaSurface& s, const VsaOptions& options, VsaStats
   };
   std::vector<uint32_t> touched;
   if (options.method == VsaMethod::greedy) {
-    GreedyOptimizer g(s, p, options.greedy);
+    GreedyOptions go = options.greedy;
+    if (getenv("LIMN_DRIFT")) go.drift = atof(getenv("LIMN_DRIFT"));
+    GreedyOptimizer g(s, p, go);
     add(st.greedy, g.run());
     while (want_more()) {
       const uint32_t k = worst_cluster(p);
@@ -56,28 +58,47 @@ Partition vsa_partition(const VsaSurface& s, const VsaOptions& options, VsaStats
       g.touch(touched);
       add(st.greedy, g.run());
     }
-    std::vector<uint32_t> merged;
-    for (size_t tp = 0; tp < options.teleports; ++tp) {
-      const uint32_t w = worst_cluster(p);
+    // Teleports: b joins a (the cheapest merge), the worst cluster w is split and its new half
+    // takes b's id; the optimiser then runs. Kept only if E dropped, else undone, and the next
+    // worst cluster is tried; a few failures in a row end it.
+    std::vector<uint32_t> merged, old_labels;
+    std::vector<uint8_t> tried(p.cluster_count(), 0);
+    size_t failures = 0;
+    for (size_t tp = 0; tp < options.teleports && failures < 3; ++tp) {
+      uint32_t w = kNone;
+      double worst = 0;
+      for (uint32_t k = 0; k < p.cluster_count(); ++k)
+        if (!tried[k] && p.size[k] >= 2 && p.cluster_energy(k) > worst)
+          worst = p.cluster_energy(k), w = k;
+      if (w == kNone) break;
       double cost = 0;
-      const auto [a, b] = w == kNone ? std::pair{kNone, kNone} : g.cheapest_merge(w, &cost);
-      if (a == kNone) break;
-      const double before = p.cluster_energy(w);
+      const auto [a, b] = g.cheapest_merge(w, &cost);
+      if (a == kNone || !(cost < worst)) break;
+      const double before = p.energy();
       const uint32_t w2 = split_cluster(s, p, w, &touched);
-      const double gain = before - p.cluster_energy(w) - p.cluster_energy(w2);
-      if (!(gain > cost + 1e-12 * before)) {
-        merge_clusters(s, p, w, w2);
-        pop_empty_cluster(p);
-        break;
-      }
-      // b joins a; the new half of w takes b's id, so ids stay 0..K-1.
       merge_clusters(s, p, a, b, &merged);
-      touched.insert(touched.end(), merged.begin(), merged.end());
       merge_clusters(s, p, b, w2);
       pop_empty_cluster(p);
-      ++st.teleports;
+      old_labels.assign(touched.size(), w);
+      for (uint32_t f : merged) old_labels.push_back(b), touched.push_back(f);
+      g.touch(touched);
+      g.begin_journal();
+      const GreedyStats gs = g.run();
+      if (p.energy() < before * (1 - 1e-9)) {
+        g.end_journal();
+        add(st.greedy, gs);
+        ++st.teleports;
+        failures = 0;
+        std::fill(tried.begin(), tried.end(), 0);
+        continue;
+      }
+      g.rollback();
+      for (size_t i = 0; i < touched.size(); ++i) p.label[touched[i]] = old_labels[i];
+      p.recompute(s);
       g.touch(touched);
       add(st.greedy, g.run());
+      tried[w] = 1;
+      ++failures;
     }
   } else {
     for (;;) {

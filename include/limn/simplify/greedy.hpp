@@ -27,6 +27,11 @@ struct GreedyOptions {
   /// Faces a connectivity check may visit when the O(1) test around the face is not conclusive;
   /// beyond it the move is refused (never risking a disconnected cluster).
   uint32_t search_budget = 32;
+  /// Once the queue runs dry, a cluster's boundary edges are scored again only when its proxy
+  /// normal has turned by more than this (about radians) since they were last all queued. 0:
+  /// after any change, so the result is an exact local minimum; the default skips rounds whose
+  /// possible gains are below about drift x face area.
+  double drift = 1e-3;
   /// Debug hook, called after every accepted move with the face, its old and new cluster and the
   /// predicted drop of E (squared model units). Tests use it to check every move lowers E.
   std::function<void(uint32_t face, uint32_t from, uint32_t to, double drop)> on_move;
@@ -59,6 +64,14 @@ class GreedyOptimizer {
   /// least (merge_cost); {kNone, kNone} when there is none. O(boundary edges).
   std::pair<uint32_t, uint32_t> cheapest_merge(uint32_t exclude, double* cost);
 
+  /// Starts recording accepted moves, so that `rollback` can undo them. O(1).
+  void begin_journal();
+  /// Undoes every move recorded since begin_journal and stops recording. Cluster sums take the
+  /// reverse moves (round-off aside, they return to their old values). O(moves recorded).
+  void rollback();
+  /// Stops recording and keeps the moves. O(1).
+  void end_journal();
+
   /// Tells the optimiser that these faces changed cluster outside it (e.g. a split): queues their
   /// edges and marks their clusters changed. O(faces given).
   void touch(std::span<const uint32_t> faces);
@@ -84,6 +97,9 @@ class GreedyOptimizer {
   std::vector<uint8_t> queued_, listed_;  // per edge
   std::vector<uint32_t> edge_stamp_;      // per edge: clock when last scored
   std::vector<uint32_t> cluster_stamp_;   // per cluster: clock of its last change
+  std::vector<uint32_t> checked_at_;      // per cluster: clock when its boundary was last queued
+  std::vector<double> checked_normal_;    // 3 per cluster: its proxy normal then
+  std::vector<uint8_t> stale_;
   uint32_t clock_ = 1;
   std::vector<uint32_t> visit_;  // per face: search generation
   std::vector<uint8_t> owner_;   // per face: the search wave that reached it
@@ -91,6 +107,8 @@ class GreedyOptimizer {
   std::vector<std::vector<uint32_t>> waves_;
   std::vector<size_t> heads_;
   std::vector<uint8_t> parent_;
+  bool journaling_ = false;
+  std::vector<std::pair<uint32_t, uint32_t>> journal_;  // (face, cluster it left)
 };
 
 /// Convenience: builds an optimiser and runs it once.
