@@ -46,9 +46,7 @@ Partition vsa_partition(const VsaSurface& s, const VsaOptions& options, VsaStats
   };
   std::vector<uint32_t> touched;
   if (options.method == VsaMethod::greedy) {
-    GreedyOptions go = options.greedy;
-    if (getenv("LIMN_DRIFT")) go.drift = atof(getenv("LIMN_DRIFT"));
-    GreedyOptimizer g(s, p, go);
+    GreedyOptimizer g(s, p, options.greedy);
     add(st.greedy, g.run());
     while (want_more()) {
       const uint32_t k = worst_cluster(p);

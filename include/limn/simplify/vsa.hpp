@@ -28,11 +28,12 @@ struct VsaOptions {
   /// Curvature seeding can make fewer than K clusters; true splits the worst clusters until K is
   /// reached (false: Jin et al.'s rule, K becomes the number reached).
   bool fill = true;
-  /// After the greedy optimiser converges, up to this many "teleports" (Cohen-Steiner et al.
-  /// sec. 3.4): merge the two adjacent clusters whose merge raises E least and split the worst
-  /// cluster, when the split gains more than the merge costs; the optimiser runs after each.
-  /// 0 is Jin et al.'s method as published. Greedy method only.
-  size_t teleports = 0;
+  /// After the greedy optimiser converges, up to this many "teleports" (after Cohen-Steiner et
+  /// al. sec. 3.4): the two adjacent clusters whose merge raises E least are merged and the
+  /// worst cluster is split, the optimiser runs, and the result is kept only if E dropped (else
+  /// undone; three failures in a row end it). 0 is Jin et al.'s method as published. Greedy
+  /// method only.
+  size_t teleports = 16;
   VsaMethod method = VsaMethod::greedy;
   SeedingOptions seeding;  ///< its `clusters` is overwritten by `proxies`
   GreedyOptions greedy;
