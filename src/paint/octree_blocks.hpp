@@ -1,0 +1,158 @@
+// The pool's block codec and the one place that writes the pool (allocation, free lists and the
+// undo journal). Internal header of the paint layer; the layout is documented in
+// include/limn/paint/texture.hpp.
+#pragma once
+
+#include <bit>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "limn/paint/texture.hpp"
+
+namespace limn::detail {
+
+using octree::CellKind;
+
+inline int popc(uint32_t x) {
+  return std::popcount(x);
+}
+inline int popc64(uint64_t x) {
+  return std::popcount(x);
+}
+
+/// A leaf cell's content: tag, one or two samples.
+struct LeafCell {
+  uint8_t tag = 0;
+  bool dbl = false;
+  Rgba8 s[2] = {0, 0};
+};
+
+/// A general node, decoded.
+struct GeneralNode {
+  CellKind kind[8] = {};
+  uint32_t ptr[8] = {};   ///< general: child block; brick: brick word
+  uint32_t info[8] = {};  ///< general: child info
+  LeafCell leaf[8];
+  Rgba8 avg = 0;
+};
+
+/// A brick, decoded into dense per-cell arrays (cell m = 8 c1 + c2).
+struct Brick {
+  uint64_t mask = 0, dbl = 0;
+  Rgba8 avg = 0;
+  LeafCell cell[64];
+};
+
+/// Words of a general node's block (even).
+inline uint32_t general_block_words(uint32_t info) {
+  const uint32_t g = octree::generals(info), l = octree::leaves(info);
+  const uint32_t n = 2 * uint32_t(popc(g)) + uint32_t(popc(octree::bricks(info))) + 1 +
+                     uint32_t(popc(l)) + uint32_t(popc(octree::doubles(info))) +
+                     (uint32_t(popc(l)) + 7) / 8;
+  return (n + 1) & ~1u;
+}
+
+/// Words of a brick's block (any parity: bricks need no alignment, so they carry no pad).
+inline uint32_t brick_block_words(uint64_t mask, uint64_t dbl) {
+  const uint32_t cells = uint32_t(popc64(mask));
+  return 2 + (dbl ? 2 : 0) + 1 + cells + uint32_t(popc64(dbl)) + (cells + 7) / 8;
+}
+
+/// Free-list class of a block: general blocks (even size, even address) and bricks (any) are
+/// kept apart, so a general node is never given an odd address.
+inline uint32_t block_class(uint32_t words, bool brick) {
+  return 2 * words + (brick ? 1 : 0);
+}
+
+/// Decodes the general node (ptr, info). Precondition: the block is inside `pool`.
+GeneralNode decode_general(std::span<const uint32_t> pool, uint32_t ptr, uint32_t info);
+/// Encodes a general node; returns the info word and fills `out` with the block.
+uint32_t encode_general(const GeneralNode& n, std::vector<uint32_t>& out);
+/// Decodes the brick named by brick word `word`.
+Brick decode_brick(std::span<const uint32_t> pool, uint32_t word);
+/// Encodes a brick into `out`; returns the double flag to or into the brick word.
+uint32_t encode_brick(const Brick& b, std::vector<uint32_t>& out);
+
+/// Premultiplied mean of colours (equal weights), back to straight RGBA8. 0 for none.
+class ColorMean {
+ public:
+  void add(Rgba8 c) {
+    const double a = channel(c, 3);
+    r_ += channel(c, 0) * a, g_ += channel(c, 1) * a, b_ += channel(c, 2) * a, a_ += a;
+    ++n_;
+  }
+  void add_weighted(Rgba8 c, double w) {
+    const double a = channel(c, 3) * w;
+    r_ += channel(c, 0) * a, g_ += channel(c, 1) * a, b_ += channel(c, 2) * a, a_ += a;
+    n_ += w;
+  }
+  Rgba8 mean() const;
+
+ private:
+  double r_ = 0, g_ = 0, b_ = 0, a_ = 0, n_ = 0;
+};
+
+/// The mip average of a leaf cell (both sides of a double cell).
+inline void add_leaf(ColorMean& m, const LeafCell& c) {
+  if (!c.dbl) {
+    m.add(c.s[0]);
+    return;
+  }
+  ColorMean two;
+  two.add(c.s[0]);
+  two.add(c.s[1]);
+  m.add(two.mean());
+}
+
+/// Every write to a texture's pool goes through here, so the journal sees it.
+class OctreeEditor {
+ public:
+  explicit OctreeEditor(OctreeTexture& t) : t_(t) {}
+
+  std::span<const uint32_t> pool() const { return t_.pool_; }
+  uint32_t word(size_t i) const { return t_.pool_[i]; }
+  Rgba8 background() const { return t_.background_; }
+  const OctreeTexture& texture() const { return t_; }
+
+  /// Writes one word (journaled when it changes).
+  void set(uint32_t i, uint32_t v);
+  /// A block of `n` words for a brick (any address) or a general node (n even, even address),
+  /// from the free list of its class or the end of the pool. Throws std::length_error past
+  /// kMaxPoolWords.
+  uint32_t alloc(uint32_t n, bool brick);
+  /// Returns a block to its free list.
+  void release(uint32_t ptr, uint32_t n, bool brick);
+  /// Writes `words` into a block of the same size: only the words that differ.
+  void write_block(uint32_t ptr, std::span<const uint32_t> words);
+  /// Replaces the block (ptr, old_n) by `words`: in place when the size is the same, else a new
+  /// block (the old one is released). Returns the block's address.
+  uint32_t replace_block(uint32_t ptr, uint32_t old_n, std::span<const uint32_t> words, bool brick);
+
+  // Journal replay (undo.cpp).
+  static void undo_ops(OctreeTexture& t, std::span<const OctreeTexture::JournalOp> ops);
+  static void redo_ops(OctreeTexture& t, std::span<const OctreeTexture::JournalOp> ops);
+  static bool& recording(OctreeTexture& t) { return t.recording_; }
+  static std::vector<OctreeTexture::JournalOp>& journal(OctreeTexture& t) { return t.journal_; }
+  static std::vector<uint32_t>& pool(OctreeTexture& t) { return t.pool_; }
+  static std::vector<std::vector<uint32_t>>& free_lists(OctreeTexture& t) { return t.free_; }
+  static const std::vector<std::vector<uint32_t>>& free_lists(const OctreeTexture& t) {
+    return t.free_;
+  }
+  static void set_cube(OctreeTexture& t, const float origin[3], float size, Rgba8 background) {
+    for (int k = 0; k < 3; ++k) t.origin_[k] = origin[k];
+    t.size_ = size;
+    t.background_ = background;
+  }
+
+  enum Op : uint32_t { kSet = 0, kGrow = 1, kPush = 2, kPop = 3 };
+
+ private:
+  void log(uint32_t kind, uint32_t a, uint32_t b, uint32_t c) {
+    if (t_.recording_) t_.journal_.push_back({kind, a, b, c});
+  }
+  OctreeTexture& t_;
+};
+
+}  // namespace limn::detail

@@ -1,0 +1,333 @@
+// Lazy refinement: a leaf is split only where the region needs more resolution and only into the
+// cells its box shares with the surface (exact box-triangle tests on triangles the Embree BVH
+// returns for the box), so memory follows the painted detail and nothing else.
+#include "refine.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace limn::detail {
+
+using namespace paint_detail;
+
+Refiner::Refiner(OctreeTexture& t, const PaintSurface& s) : ed_(t), s_(s) {
+  // Boxes grow by 2^-22 of the cube: a triangle lying on a cell face belongs to both cells, so a
+  // point on the surface always lands in a cell that holds it.
+  slack_ = t.size() * float(1.0 / double(1u << 22));
+}
+
+CellBox Refiner::box(int level, uint32_t x, uint32_t y, uint32_t z) const {
+  CellBox b;
+  b.level = level, b.x = x, b.y = y, b.z = z;
+  const OctreeTexture& t = ed_.texture();
+  const double s = double(t.size()) / double(1u << level);
+  b.c = {float(double(t.origin()[0]) + (double(x) + 0.5) * s),
+         float(double(t.origin()[1]) + (double(y) + 0.5) * s),
+         float(double(t.origin()[2]) + (double(z) + 0.5) * s)};
+  b.h = float(0.5 * s);
+  return b;
+}
+
+bool Refiner::meets(const CellBox& b) const {
+  if (region_.everything) return true;
+  const float d[3] = {std::max(std::fabs(region_.c.x - b.c.x) - b.h, 0.0f),
+                      std::max(std::fabs(region_.c.y - b.c.y) - b.h, 0.0f),
+                      std::max(std::fabs(region_.c.z - b.c.z) - b.h, 0.0f)};
+  return d[0] * d[0] + d[1] * d[1] + d[2] * d[2] <= region_.r * region_.r;
+}
+
+void Refiner::filter(std::span<const uint32_t> in, const CellBox& b,
+                     std::vector<uint32_t>& out) const {
+  out.clear();
+  for (uint32_t t : in)
+    if (tri_box_overlap(b.c, b.h, v3(s_.corner(t, 0)), v3(s_.corner(t, 1)), v3(s_.corner(t, 2)),
+                        slack_))
+      out.push_back(t);
+}
+
+void Refiner::full_tris(const CellBox& b, std::span<const uint32_t> region_tris,
+                        std::vector<uint32_t>& out) const {
+  if (region_.everything) {
+    out.assign(region_tris.begin(), region_tris.end());
+    return;
+  }
+  std::vector<uint32_t> near;
+  const float c[3] = {b.c.x, b.c.y, b.c.z};
+  s_.triangles_near(c, (b.h + slack_) * 1.7320508f * 1.0001f, near);
+  filter(near, b, out);
+}
+
+LeafCell Refiner::make_leaf(std::span<const uint32_t> tris, const LeafCell* parent) const {
+  auto inherit = [&](const float* n) -> Rgba8 {
+    if (!parent) return ed_.background();
+    const int side = octree::side_for_normal(parent->tag, n);
+    if (side == 0) return parent->s[0];
+    return parent->dbl ? parent->s[1] : ed_.background();
+  };
+  LeafCell cell;
+  const float* front = s_.normal(tris[0]);
+  cell.tag = uint8_t(octree::tag_for_normal(front));
+  cell.s[0] = inherit(front);
+  for (uint32_t t : tris)
+    if (octree::side_for_normal(cell.tag, s_.normal(t)) == 1) {
+      cell.dbl = true;
+      cell.s[1] = inherit(s_.normal(t));
+      break;
+    }
+  return cell;
+}
+
+Rgba8 Refiner::child_avg(const GeneralNode& n, int c) const {
+  if (n.kind[c] == CellKind::general)
+    return ed_.word(n.ptr[c] + 2 * uint32_t(popc(octree::generals(n.info[c]))) +
+                    uint32_t(popc(octree::bricks(n.info[c]))));
+  if (n.kind[c] == CellKind::brick) {
+    const uint32_t w = n.ptr[c];
+    return ed_.word((w & ~octree::kBrickDoubleFlag) + 2 + ((w & octree::kBrickDoubleFlag) ? 2 : 0));
+  }
+  return 0;
+}
+
+Rgba8 Refiner::general_avg(const GeneralNode& n) const {
+  ColorMean m;
+  for (int c = 0; c < 8; ++c) {
+    if (n.kind[c] == CellKind::leaf) add_leaf(m, n.leaf[c]);
+    if (n.kind[c] == CellKind::general || n.kind[c] == CellKind::brick) m.add(child_avg(n, c));
+  }
+  return m.mean();
+}
+
+Rgba8 Refiner::brick_avg(const Brick& b) {
+  ColorMean m;
+  for (int k = 0; k < 64; ++k)
+    if (b.mask >> k & 1) add_leaf(m, b.cell[k]);
+  return m.mean();
+}
+
+void Refiner::store_general(const GeneralNode& n, uint32_t old_ptr, uint32_t old_info,
+                            uint32_t& ptr, uint32_t& info) {
+  info = encode_general(n, words_);
+  const uint32_t old_n = old_ptr ? general_block_words(old_info) : 0;
+  ptr = ed_.replace_block(old_ptr, old_n, words_, false);
+}
+
+uint32_t Refiner::store_brick(const Brick& b, uint32_t old_word) {
+  const uint32_t flag = encode_brick(b, words_);
+  uint32_t old_ptr = 0, old_n = 0;
+  if (old_word) {
+    old_ptr = old_word & ~octree::kBrickDoubleFlag;
+    const Brick old = decode_brick(ed_.pool(), old_word);
+    old_n = brick_block_words(old.mask, old.dbl);
+  }
+  return ed_.replace_block(old_ptr, old_n, words_, true) | flag;
+}
+
+GeneralNode Refiner::refine_leaf(const CellBox& cb, const LeafCell& leaf,
+                                 std::span<const uint32_t> full) {
+  GeneralNode g;
+  std::vector<uint32_t> fc;
+  for (int c = 0; c < 8; ++c) {
+    const CellBox b = box(cb.level + 1, 2 * cb.x + uint32_t(c & 1), 2 * cb.y + uint32_t(c >> 1 & 1),
+                          2 * cb.z + uint32_t(c >> 2 & 1));
+    filter(full, b, fc);
+    if (fc.empty()) continue;
+    g.kind[c] = CellKind::leaf;
+    g.leaf[c] = make_leaf(fc, &leaf);
+    ++stats.leaves_created;
+  }
+  ++stats.generals_created;
+  return g;
+}
+
+Brick Refiner::make_brick(const CellBox& cb, const LeafCell& leaf, std::span<const uint32_t> full) {
+  Brick b;
+  std::vector<uint32_t> f1, f2;
+  for (int c1 = 0; c1 < 8; ++c1) {
+    const CellBox b1 = box(cb.level + 1, 2 * cb.x + uint32_t(c1 & 1),
+                           2 * cb.y + uint32_t(c1 >> 1 & 1), 2 * cb.z + uint32_t(c1 >> 2 & 1));
+    filter(full, b1, f1);
+    if (f1.empty()) continue;
+    for (int c2 = 0; c2 < 8; ++c2) {
+      const CellBox b2 = box(cb.level + 2, 2 * b1.x + uint32_t(c2 & 1),
+                             2 * b1.y + uint32_t(c2 >> 1 & 1), 2 * b1.z + uint32_t(c2 >> 2 & 1));
+      filter(f1, b2, f2);
+      if (f2.empty()) continue;
+      const int m = 8 * c1 + c2;
+      b.mask |= uint64_t(1) << m;
+      b.cell[m] = make_leaf(f2, &leaf);
+      ++stats.leaves_created;
+    }
+  }
+  b.avg = brick_avg(b);
+  ++stats.bricks_created;
+  return b;
+}
+
+GeneralNode Refiner::explode(const Brick& b, const CellBox&) {
+  GeneralNode g;
+  for (int c1 = 0; c1 < 8; ++c1) {
+    const uint32_t byte = uint32_t(b.mask >> (8 * c1)) & 255u;
+    if (!byte) continue;
+    GeneralNode child;
+    for (int c2 = 0; c2 < 8; ++c2)
+      if (byte >> c2 & 1) child.kind[c2] = CellKind::leaf, child.leaf[c2] = b.cell[8 * c1 + c2];
+    child.avg = general_avg(child);
+    store_general(child, 0, 0, g.ptr[c1], g.info[c1]);
+    g.kind[c1] = CellKind::general;
+  }
+  g.avg = b.avg;
+  ++stats.bricks_exploded;
+  return g;
+}
+
+bool Refiner::try_compact(const GeneralNode& n, Brick& out) const {
+  bool any = false;
+  for (int c = 0; c < 8; ++c) {
+    if (n.kind[c] == CellKind::empty) continue;
+    if (n.kind[c] != CellKind::general) return false;
+    if (octree::leaves(n.info[c]) != octree::occupied(n.info[c])) return false;
+    any = true;
+  }
+  if (!any) return false;
+  out = Brick{};
+  for (int c1 = 0; c1 < 8; ++c1) {
+    if (n.kind[c1] != CellKind::general) continue;
+    const GeneralNode child = decode_general(ed_.pool(), n.ptr[c1], n.info[c1]);
+    for (int c2 = 0; c2 < 8; ++c2)
+      if (child.kind[c2] == CellKind::leaf) {
+        out.mask |= uint64_t(1) << (8 * c1 + c2);
+        out.cell[8 * c1 + c2] = child.leaf[c2];
+      }
+  }
+  out.avg = brick_avg(out);
+  return true;
+}
+
+void Refiner::visit_brick(Brick& b, const CellBox& bb, std::span<const uint32_t> tris) {
+  std::vector<uint32_t> t1, t2;
+  for (int c1 = 0; c1 < 8; ++c1) {
+    const CellBox b1 = box(bb.level + 1, 2 * bb.x + uint32_t(c1 & 1),
+                           2 * bb.y + uint32_t(c1 >> 1 & 1), 2 * bb.z + uint32_t(c1 >> 2 & 1));
+    if (!meets(b1)) continue;
+    filter(tris, b1, t1);
+    if (t1.empty()) continue;
+    for (int c2 = 0; c2 < 8; ++c2) {
+      const CellBox b2 = box(bb.level + 2, 2 * b1.x + uint32_t(c2 & 1),
+                             2 * b1.y + uint32_t(c2 >> 1 & 1), 2 * b1.z + uint32_t(c2 >> 2 & 1));
+      if (!meets(b2)) continue;
+      filter(t1, b2, t2);
+      if (t2.empty()) continue;
+      const int m = 8 * c1 + c2;
+      if (!(b.mask >> m & 1)) {
+        // A surface cell the brick lacks: the texture was made for another mesh.
+        b.mask |= uint64_t(1) << m;
+        b.cell[m] = make_leaf(t2, nullptr);
+        ++stats.leaves_created;
+      }
+      if (painter_) painter_->paint(b2, b.cell[m], t2), ++stats.leaves_painted;
+    }
+  }
+  b.avg = brick_avg(b);
+}
+
+void Refiner::visit_general(GeneralNode& n, const CellBox& nb, std::span<const uint32_t> tris) {
+  std::vector<uint32_t> tc, full;
+  for (int c = 0; c < 8; ++c) {
+    const CellBox cb = box(nb.level + 1, 2 * nb.x + uint32_t(c & 1),
+                           2 * nb.y + uint32_t(c >> 1 & 1), 2 * nb.z + uint32_t(c >> 2 & 1));
+    if (!meets(cb)) continue;
+    filter(tris, cb, tc);
+    if (tc.empty()) continue;
+    const int level = cb.level;
+    if (n.kind[c] == CellKind::empty) {
+      full_tris(cb, tc, full);
+      if (full.empty()) continue;
+      n.kind[c] = CellKind::leaf;
+      n.leaf[c] = make_leaf(full, nullptr);
+      ++stats.leaves_created;
+    }
+    switch (n.kind[c]) {
+      case CellKind::leaf: {
+        if (level >= depth_) {
+          if (painter_) painter_->paint(cb, n.leaf[c], tc), ++stats.leaves_painted;
+          break;
+        }
+        full_tris(cb, tc, full);
+        // A cell the surface only grazes within the boxes' slack may have no sub-cell the surface
+        // meets once rounded: it stays a leaf.
+        if (level == depth_ - 2) {
+          Brick b = make_brick(cb, n.leaf[c], full);
+          if (b.mask == 0) break;
+          visit_brick(b, cb, tc);
+          n.kind[c] = CellKind::brick;
+          n.ptr[c] = store_brick(b, 0);
+        } else {
+          GeneralNode g = refine_leaf(cb, n.leaf[c], full);
+          bool any = false;
+          for (int k = 0; k < 8; ++k) any |= g.kind[k] != CellKind::empty;
+          if (!any) break;
+          visit_general(g, cb, tc);
+          n.kind[c] = CellKind::general;
+          store_general(g, 0, 0, n.ptr[c], n.info[c]);
+        }
+        break;
+      }
+      case CellKind::general: {
+        GeneralNode g = decode_general(ed_.pool(), n.ptr[c], n.info[c]);
+        visit_general(g, cb, tc);
+        Brick b;
+        if (try_compact(g, b)) {
+          for (int k = 0; k < 8; ++k)
+            if (g.kind[k] == CellKind::general)
+              ed_.release(g.ptr[k], general_block_words(g.info[k]), false);
+          ed_.release(n.ptr[c], general_block_words(n.info[c]), false);
+          n.kind[c] = CellKind::brick;
+          n.ptr[c] = store_brick(b, 0);
+          ++stats.bricks_compacted;
+        } else {
+          store_general(g, n.ptr[c], n.info[c], n.ptr[c], n.info[c]);
+        }
+        break;
+      }
+      case CellKind::brick: {
+        Brick b = decode_brick(ed_.pool(), n.ptr[c]);
+        if (level + 2 < depth_) {
+          const uint32_t old_ptr = n.ptr[c] & ~octree::kBrickDoubleFlag;
+          GeneralNode g = explode(b, cb);
+          ed_.release(old_ptr, brick_block_words(b.mask, b.dbl), true);
+          visit_general(g, cb, tc);
+          n.kind[c] = CellKind::general;
+          store_general(g, 0, 0, n.ptr[c], n.info[c]);
+        } else {
+          visit_brick(b, cb, tc);
+          n.ptr[c] = store_brick(b, n.ptr[c]);
+        }
+        break;
+      }
+      case CellKind::empty:
+        break;
+    }
+  }
+  n.avg = general_avg(n);
+}
+
+void Refiner::run(const Region& region, std::span<const uint32_t> tris, int depth,
+                  LeafPainter* painter) {
+  region_ = region, depth_ = depth, painter_ = painter;
+  const uint32_t ptr = ed_.word(0), info = ed_.word(1);
+  GeneralNode root = octree::occupied(info) ? decode_general(ed_.pool(), ptr, info) : GeneralNode{};
+  const CellBox rb = box(0, 0, 0, 0);
+  std::vector<uint32_t> t0;
+  filter(tris, rb, t0);
+  if (t0.empty()) return;
+  visit_general(root, rb, t0);
+  uint32_t nptr = 0, ninfo = 0;
+  bool any = false;
+  for (int c = 0; c < 8; ++c) any |= root.kind[c] != CellKind::empty;
+  if (!any) return;
+  store_general(root, ptr, info, nptr, ninfo);
+  ed_.set(0, nptr);
+  ed_.set(1, ninfo);
+}
+
+}  // namespace limn::detail

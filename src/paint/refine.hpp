@@ -1,0 +1,94 @@
+// Lazy refinement of the octree over a region of the surface, calling a painter on the leaves it
+// reaches. Internal header of the paint layer.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "geometry.hpp"
+#include "limn/paint/surface.hpp"
+#include "limn/paint/texture.hpp"
+#include "octree_blocks.hpp"
+
+namespace limn::detail {
+
+/// A cell of the octree: its level, integer coordinates at that level, centre and half size.
+struct CellBox {
+  int level = 0;
+  uint32_t x = 0, y = 0, z = 0;
+  paint_detail::V3 c;
+  float h = 0;
+};
+
+/// What happens to a leaf cell at or below the target depth inside the region.
+class LeafPainter {
+ public:
+  virtual ~LeafPainter() = default;
+  /// `tris`: every triangle (sorted) meeting the cell; may change `cell` (samples, or add the
+  /// back sample).
+  virtual void paint(const CellBox& box, LeafCell& cell, std::span<const uint32_t> tris) = 0;
+};
+
+/// Where to refine and paint: everywhere, or cells meeting a ball.
+struct Region {
+  bool everything = true;
+  paint_detail::V3 c;
+  float r = 0;
+};
+
+struct RefineStats {
+  size_t leaves_created = 0, bricks_created = 0, generals_created = 0, bricks_exploded = 0,
+         bricks_compacted = 0, leaves_painted = 0;
+};
+
+class Refiner {
+ public:
+  Refiner(OctreeTexture& t, const PaintSurface& s);
+
+  /// Refines every cell meeting `region` and touched by the surface down to level `depth`, then
+  /// calls `painter` (may be null) on every leaf at level >= depth there. `tris`: a sorted list
+  /// holding at least every triangle meeting a cell of the region at level >= depth - 2.
+  /// Precondition: 1 <= depth <= kMaxDepth.
+  void run(const Region& region, std::span<const uint32_t> tris, int depth, LeafPainter* painter);
+
+  /// The box of a cell.
+  CellBox box(int level, uint32_t x, uint32_t y, uint32_t z) const;
+  /// The triangles of `in` meeting the box (order kept).
+  void filter(std::span<const uint32_t> in, const CellBox& b, std::vector<uint32_t>& out) const;
+  /// A new leaf for a cell whose triangles are `tris` (non-empty), with colours inherited from
+  /// `parent` (null: background).
+  LeafCell make_leaf(std::span<const uint32_t> tris, const LeafCell* parent) const;
+
+  RefineStats stats;
+
+ private:
+  bool meets(const CellBox& b) const;
+  void full_tris(const CellBox& b, std::span<const uint32_t> region_tris,
+                 std::vector<uint32_t>& out) const;
+  void visit_general(GeneralNode& n, const CellBox& nb, std::span<const uint32_t> tris);
+  void visit_brick(Brick& b, const CellBox& bb, std::span<const uint32_t> tris);
+  /// A new general node for the leaf cell `cb` (refined one level).
+  GeneralNode refine_leaf(const CellBox& cb, const LeafCell& leaf, std::span<const uint32_t> full);
+  Brick make_brick(const CellBox& cb, const LeafCell& leaf, std::span<const uint32_t> full);
+  GeneralNode explode(const Brick& b, const CellBox& bb);
+  /// Encodes and stores a node; returns (ptr, info). `old_ptr` 0: new.
+  void store_general(const GeneralNode& n, uint32_t old_ptr, uint32_t old_info, uint32_t& ptr,
+                     uint32_t& info);
+  uint32_t store_brick(const Brick& b, uint32_t old_word);
+  Rgba8 child_avg(const GeneralNode& n, int c) const;
+  Rgba8 general_avg(const GeneralNode& n) const;
+  static Rgba8 brick_avg(const Brick& b);
+  /// A general node whose cells are all leaf-only general nodes becomes a brick.
+  bool try_compact(const GeneralNode& n, Brick& out) const;
+
+  OctreeEditor ed_;
+  const PaintSurface& s_;
+  Region region_;
+  int depth_ = 0;
+  LeafPainter* painter_ = nullptr;
+  float slack_ = 0;
+  std::vector<uint32_t> words_;
+};
+
+}  // namespace limn::detail

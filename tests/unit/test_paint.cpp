@@ -1,0 +1,310 @@
+// The octree texture: the start tree, lookups against a plain map of the cells, filtering against
+// a reference trilinear sum, the pool's free lists, deep levels.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+#include <set>
+
+#include "limn/mesh/io.hpp"
+#include "limn/paint/brush.hpp"
+#include "limn/paint/lookup.hpp"
+#include "limn/paint/surface.hpp"
+#include "limn/paint/texture.hpp"
+#include "paint_oracle.hpp"
+
+namespace limn {
+namespace {
+
+using test::P3;
+
+const std::string kModels = LIMN_SHARED_MODELS;
+
+// The level-l cells the oracle says the surface meets, with box slack `slack`.
+std::set<std::tuple<uint32_t, uint32_t, uint32_t>> surface_cells(const OctreeTexture& t,
+                                                                 const std::vector<test::Tri>& tris,
+                                                                 int level, double slack) {
+  std::set<std::tuple<uint32_t, uint32_t, uint32_t>> out;
+  const double cell = double(t.size()) / double(1u << level);
+  for (const test::Tri& tri : tris) {
+    if (tri.n == P3{0, 0, 0}) continue;
+    uint32_t lo[3], hi[3];
+    for (int k = 0; k < 3; ++k) {
+      const double mn = std::min({tri.a[size_t(k)], tri.b[size_t(k)], tri.c[size_t(k)]});
+      const double mx = std::max({tri.a[size_t(k)], tri.b[size_t(k)], tri.c[size_t(k)]});
+      lo[k] = uint32_t(std::max(0.0, std::floor((mn - t.origin()[k] - 2 * slack) / cell)));
+      hi[k] = uint32_t(
+          std::min(double((1u << level) - 1), std::floor((mx - t.origin()[k] + 2 * slack) / cell)));
+    }
+    for (uint32_t x = lo[0]; x <= hi[0]; ++x)
+      for (uint32_t y = lo[1]; y <= hi[1]; ++y)
+        for (uint32_t z = lo[2]; z <= hi[2]; ++z) {
+          const P3 blo = {t.origin()[0] + x * cell, t.origin()[1] + y * cell,
+                          t.origin()[2] + z * cell};
+          const P3 bhi = {blo[0] + cell, blo[1] + cell, blo[2] + cell};
+          if (test::tri_meets_box(tri, blo, bhi, slack)) out.insert({x, y, z});
+        }
+  }
+  return out;
+}
+
+TEST(PaintOctree, StartTreeHoldsExactlyTheCellsTheSurfaceMeets) {
+  const Mesh m = test::uv_sphere(1.0, 10, 20);
+  const OctreeTexture t = OctreeTexture::create(m, pack_rgba8(10, 20, 30, 40));
+  EXPECT_EQ(t.check(), "");
+  std::set<std::tuple<uint32_t, uint32_t, uint32_t>> got;
+  size_t other_levels = 0;
+  t.for_each_sample([&](const OctreeSample& s) {
+    if (s.level != octree::kStartDepth) ++other_levels;
+    if (s.side == 0) got.insert({s.x, s.y, s.z});
+    EXPECT_EQ(s.color, pack_rgba8(10, 20, 30, 40));
+  });
+  EXPECT_EQ(other_levels, 0u);
+  const auto tris = test::triangles(m);
+  const double slack = double(t.size()) / double(1u << 22);
+  const auto inner = surface_cells(t, tris, octree::kStartDepth, slack * 0.5);
+  const auto outer = surface_cells(t, tris, octree::kStartDepth, slack * 2);
+  for (const auto& c : inner) EXPECT_TRUE(got.count(c)) << "missing a surface cell";
+  for (const auto& c : got) EXPECT_TRUE(outer.count(c)) << "a cell the surface does not meet";
+  EXPECT_GT(got.size(), 50u);
+  // The cube is the mesh's bounding cube.
+  EXPECT_NEAR(t.size(), 2.0 * 1.02, 1e-5);
+}
+
+// Random dabs at mixed depths, colours, blends.
+void paint_random(OctreeTexture& t, const PaintSurface& s, const Mesh& m, std::mt19937& rng,
+                  int dabs, std::initializer_list<int> depths, float radius_frac) {
+  const auto tris = test::triangles(m);
+  std::uniform_real_distribution<double> u01(0, 1);
+  const std::vector<int> ds(depths);
+  for (int i = 0; i < dabs; ++i) {
+    Brush b;
+    b.depth = ds[size_t(i) % ds.size()];
+    b.radius = float(t.size() * radius_frac * (0.5 + u01(rng)));
+    for (float& c : b.color) c = float(u01(rng));
+    b.hardness = float(u01(rng));
+    b.opacity = float(0.3 + 0.7 * u01(rng));
+    b.blend = BlendMode(i % 4);
+    const test::Tri& tri = tris[size_t(u01(rng) * double(tris.size())) % tris.size()];
+    const P3 p = test::point_in(tri, u01(rng), u01(rng));
+    const float pf[3] = {float(p[0]), float(p[1]), float(p[2])};
+    StrokePainter sp(t, s);
+    sp.begin(b);
+    sp.dab_world(pf);
+    sp.end();
+  }
+}
+
+struct Probe {
+  float p[3];
+  float n[3];
+  bool has_n;
+};
+
+std::vector<Probe> probes(const OctreeTexture& t, const Mesh& m, std::mt19937& rng, size_t count) {
+  const auto tris = test::triangles(m);
+  std::uniform_real_distribution<double> u01(0, 1);
+  std::vector<Probe> out;
+  for (size_t i = 0; i < count; ++i) {
+    Probe pr{};
+    const int kind = int(i % 4);
+    if (kind < 3) {
+      const test::Tri& tri = tris[size_t(u01(rng) * double(tris.size())) % tris.size()];
+      const P3 p = test::point_in(tri, u01(rng), u01(rng));
+      for (int k = 0; k < 3; ++k) pr.p[k] = float(p[size_t(k)]);
+      for (int k = 0; k < 3; ++k) pr.n[k] = float(kind == 1 ? -tri.n[size_t(k)] : tri.n[size_t(k)]);
+      pr.has_n = kind != 2;
+    } else {
+      for (int k = 0; k < 3; ++k) {
+        pr.p[k] = float(t.origin()[k] + t.size() * (1.1 * u01(rng) - 0.05));
+        pr.n[k] = float(u01(rng) - 0.5);
+      }
+      pr.has_n = true;
+    }
+    out.push_back(pr);
+  }
+  return out;
+}
+
+// Reference trilinear at a leaf's level, from the map.
+bool reference_filtered(const test::CellMap& map, const OctreeTexture& t, const float p[3],
+                        const float* n, float out[4]) {
+  uint32_t xyz[3];
+  double u[3];
+  for (int k = 0; k < 3; ++k) {
+    u[k] = (double(p[k]) - t.origin()[k]) / t.size();
+    if (!(u[k] >= 0 && u[k] < 1)) return false;
+    xyz[k] = std::min(uint32_t(u[k] * 65536.0), 65535u);
+  }
+  int level = 0;
+  if (!map.leaf(xyz[0], xyz[1], xyz[2], &level)) return false;
+  double acc[5] = {0, 0, 0, 0, 0};
+  const double cells = double(1u << level);
+  for (int corner = 0; corner < 8; ++corner) {
+    double w = 1;
+    int64_t ic[3];
+    for (int k = 0; k < 3; ++k) {
+      const double g = u[k] * cells - 0.5, f = std::floor(g);
+      const int d = corner >> k & 1;
+      ic[k] = int64_t(f) + d;
+      w *= d ? g - f : 1 - (g - f);
+    }
+    bool inside = true;
+    for (int k = 0; k < 3; ++k) inside = inside && ic[k] >= 0 && ic[k] < int64_t(cells);
+    if (!inside || w <= 0) continue;
+    const int sh = 16 - level;
+    const uint32_t half = sh ? 1u << (sh - 1) : 0;
+    const test::CellMap::Cell* c =
+        map.leaf((uint32_t(ic[0]) << sh) + half, (uint32_t(ic[1]) << sh) + half,
+                 (uint32_t(ic[2]) << sh) + half);
+    if (!c) continue;
+    const int side = test::side_of(c->tag, n);
+    if (side && !c->dbl) continue;
+    const Rgba8 col = c->s[side];
+    const double a = channel(col, 3) / 255.0;
+    for (int k = 0; k < 3; ++k) acc[k] += w * a * channel(col, k) / 255.0;
+    acc[3] += w * a, acc[4] += w;
+  }
+  if (!(acc[4] > 0)) return false;
+  for (int k = 0; k < 3; ++k) out[k] = acc[3] > 0 ? float(acc[k] / acc[3]) : 0.0f;
+  out[3] = float(acc[3] / acc[4]);
+  return true;
+}
+
+void expect_lookups_match(const OctreeTexture& t, const Mesh& m, std::mt19937& rng) {
+  const test::CellMap map(t);
+  std::vector<Probe> pr = probes(t, m, rng, 12000);
+  OctreeSampler random_order(t);
+  size_t found = 0, compared_filtered = 0;
+  for (const Probe& q : pr) {
+    const float* n = q.has_n ? q.n : nullptr;
+    Rgba8 want, got, fresh;
+    const bool w = map.nearest(q.p, n, want);
+    const bool g = random_order.nearest(q.p, n, got);
+    const bool f = lookup_nearest(t, q.p, n, fresh);
+    ASSERT_EQ(w, g);
+    ASSERT_EQ(w, f);
+    ASSERT_EQ(want, got);
+    ASSERT_EQ(want, fresh);
+    found += w;
+    float rf[4], lf[4];
+    const bool hr = reference_filtered(map, t, q.p, n, rf);
+    if (hr) {
+      ASSERT_TRUE(random_order.filtered(q.p, n, 0.0f, lf));
+      for (int k = 0; k < 4; ++k) ASSERT_NEAR(rf[k], lf[k], 2e-4) << k;
+      ++compared_filtered;
+    }
+  }
+  EXPECT_GT(found, pr.size() / 2);
+  EXPECT_GT(compared_filtered, pr.size() / 2);
+  // The same points in Morton order through one cached sampler.
+  std::vector<std::pair<uint64_t, size_t>> order;
+  for (size_t i = 0; i < pr.size(); ++i) {
+    uint64_t key = 0;
+    uint32_t c[3];
+    for (int k = 0; k < 3; ++k) {
+      const double u = std::clamp((double(pr[i].p[k]) - t.origin()[k]) / t.size(), 0.0, 0.999999);
+      c[k] = uint32_t(u * 65536.0);
+    }
+    for (int b = 15; b >= 0; --b)
+      for (int k = 0; k < 3; ++k) key = key << 1 | (c[k] >> b & 1u);
+    order.push_back({key, i});
+  }
+  std::sort(order.begin(), order.end());
+  OctreeSampler coherent(t);
+  for (auto [key, i] : order) {
+    const float* n = pr[i].has_n ? pr[i].n : nullptr;
+    Rgba8 want, got;
+    ASSERT_EQ(map.nearest(pr[i].p, n, want), coherent.nearest(pr[i].p, n, got));
+    ASSERT_EQ(want, got);
+  }
+}
+
+TEST(PaintOctree, LookupsEqualAMapOfTheCellsOnRandomPoints) {
+  std::mt19937 rng(7);
+  const Mesh m = test::uv_sphere(1.0, 24, 48);
+  const PaintSurface s(m);
+  OctreeTexture t = OctreeTexture::create(s, pack_rgba8(255, 255, 255, 0));
+  paint_random(t, s, m, rng, 24, {5, 8, 10, 7, 11}, 0.03f);
+  ASSERT_EQ(t.check(), "");
+  const OctreeTextureStats st = t.stats();
+  EXPECT_GE(st.max_depth, 11);
+  EXPECT_GT(st.bricks, 10u);
+  expect_lookups_match(t, m, rng);
+}
+
+TEST(PaintOctree, LookupsEqualAMapOfTheCellsOnSpot) {
+  std::mt19937 rng(11);
+  const Mesh m = read_mesh(kModels + "/tri/spot.obj");
+  const PaintSurface s(m);
+  OctreeTexture t = OctreeTexture::create(s);
+  paint_random(t, s, m, rng, 20, {10, 9, 6}, 0.02f);
+  ASSERT_EQ(t.check(), "");
+  expect_lookups_match(t, m, rng);
+}
+
+TEST(PaintOctree, FreedBlocksAreRecycledAndEveryWordIsAccountedFor) {
+  const Mesh m = test::uv_sphere(1.0, 16, 32);
+  const PaintSurface s(m);
+  OctreeTexture t = OctreeTexture::create(s);
+  const float here[3] = {0, 0, 1}, there[3] = {0, 1, 0};
+  Brush b;
+  b.radius = 0.3f;
+  b.depth = 6;
+  for (int depth : {6, 9}) {  // deeper over the same place: bricks explode, blocks are freed
+    b.depth = depth;
+    StrokePainter p(t, s);
+    p.begin(b);
+    p.dab_world(here);
+    p.end();
+    ASSERT_EQ(t.check(), "");
+  }
+  const auto freed = t.free_blocks();
+  ASSERT_FALSE(freed.empty());
+  b.depth = 9;
+  StrokePainter p(t, s);
+  p.begin(b);
+  p.dab_world(there);
+  p.end();
+  ASSERT_EQ(t.check(), "");  // no overlaps, no leaks: every word is in a live or a free block
+  const auto still = t.free_blocks();
+  size_t reused = 0;
+  for (const auto& f : freed)
+    if (!std::binary_search(still.begin(), still.end(), f)) ++reused;
+  EXPECT_GT(reused, 0u) << "freed blocks were not handed out again";
+}
+
+TEST(PaintOctree, DepthTwelveAndSixteenAreReachable) {
+  const Mesh m = test::uv_sphere(1.0, 16, 32);
+  const PaintSurface s(m);
+  OctreeTexture t = OctreeTexture::create(s);
+  const float a[3] = {0.6f, 0.0f, 0.8f}, c[3] = {-0.6f, 0.0f, -0.8f};
+  for (auto [depth, radius, near] : {std::tuple{12, 0.004f, a}, std::tuple{16, 0.0003f, c}}) {
+    SurfaceHit on;
+    ASSERT_TRUE(s.closest_point(near, 1, on));
+    const float* where = on.p;
+    Brush b;
+    b.depth = depth, b.radius = radius, b.hardness = 1;
+    b.color[0] = 0, b.color[1] = 1, b.color[2] = 0, b.color[3] = 1;
+    StrokePainter p(t, s);
+    p.begin(b);
+    ASSERT_TRUE(p.dab_world(where));
+    p.end();
+    SurfaceHit h;
+    ASSERT_TRUE(s.closest_point(where, 1, h));
+    Rgba8 col;
+    int level = 0;
+    OctreeSampler smp(t);
+    ASSERT_TRUE(smp.nearest(h.p, h.n, col, &level));
+    EXPECT_EQ(col, pack_rgba8(0, 255, 0, 255));
+    EXPECT_EQ(level, depth);
+  }
+  ASSERT_EQ(t.check(), "");
+  const OctreeTextureStats st = t.stats();
+  EXPECT_EQ(st.max_depth, 16);
+  // Adaptive: two small deep spots cost kilobytes, not the 65536^3 grid.
+  EXPECT_LT(st.bytes, 400000u);
+}
+
+}  // namespace
+}  // namespace limn
