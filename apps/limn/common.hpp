@@ -17,6 +17,8 @@ void add_shape(CLI::App& app);
 void add_demo(CLI::App& app);
 void add_subdivide(CLI::App& app);
 void add_simplify(CLI::App& app);
+void add_paint(CLI::App& app);
+void add_bake(CLI::App& app);
 
 /// Milliseconds since construction.
 class Stopwatch {

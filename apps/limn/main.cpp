@@ -17,6 +17,8 @@ int main(int argc, char** argv) {
   limn::cli::add_shape(app);
   limn::cli::add_subdivide(app);
   limn::cli::add_simplify(app);
+  limn::cli::add_paint(app);
+  limn::cli::add_bake(app);
   limn::cli::add_demo(app);
   try {
     app.parse(argc, argv);
