@@ -272,10 +272,13 @@ void along(std::span<const T> pts, int dim, double step, F&& f) {
   }
   if (total / step + double(n) > 1e7)
     throw InputError("stroke: more than 10 million dabs (spacing too small for its length)");
+  // Dab k sits at arc length k * step, computed from k (not accumulated), so no rounding drift
+  // drops or adds the last dab.
   double p[3];
   for (int k = 0; k < dim; ++k) p[k] = double(pts[size_t(k)]);
   f(p);
-  double next = step;  // arc length from the current segment's start to the next dab
+  uint64_t next = 1;
+  double start = 0;  // arc length at the current segment's start
   for (size_t i = 1; i < n; ++i) {
     const T* a = &pts[(i - 1) * size_t(dim)];
     const T* b = &pts[i * size_t(dim)];
@@ -283,13 +286,13 @@ void along(std::span<const T> pts, int dim, double step, F&& f) {
     for (int k = 0; k < dim; ++k)
       l2 += (double(b[k]) - double(a[k])) * (double(b[k]) - double(a[k]));
     const double len = std::sqrt(l2);
-    while (next <= len) {
-      for (int k = 0; k < dim; ++k)
-        p[k] = double(a[k]) + (double(b[k]) - double(a[k])) * (next / len);
+    while (double(next) * step <= start + len + 1e-9 * step) {
+      const double u = len > 0 ? std::clamp((double(next) * step - start) / len, 0.0, 1.0) : 1.0;
+      for (int k = 0; k < dim; ++k) p[k] = double(a[k]) + (double(b[k]) - double(a[k])) * u;
       f(p);
-      next += step;
+      ++next;
     }
-    next -= len;
+    start += len;
   }
 }
 

@@ -116,6 +116,9 @@ PaintSurface::PaintSurface(const Mesh& mesh) : embree_(std::make_unique<Embree>(
   if (!embree_->device) throw std::runtime_error("Embree: cannot create a device");
   embree_->scene = rtcNewScene(embree_->device);
   rtcSetSceneBuildQuality(embree_->scene, RTC_BUILD_QUALITY_HIGH);
+  // Watertight: a ray through a shared vertex or edge must not slip between the triangles (a
+  // missed occluder would paint through it, a missed pick would drop a dab).
+  rtcSetSceneFlags(embree_->scene, RTC_SCENE_FLAG_ROBUST);
   RTCGeometry g = rtcNewGeometry(embree_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
   float* vb = static_cast<float*>(rtcSetNewGeometryBuffer(
       g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.vertex_count()));
