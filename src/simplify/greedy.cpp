@@ -13,10 +13,9 @@ namespace {
 
 // |N + sign v| - |N| without the cancellation of subtracting two close norms:
 // (|N + v|^2 - |N|^2) / (|N + v| + |N|).
-inline double norm_change(const double* N, const double* v, double sign) {
+inline double norm_change(const double* N, double n0, const double* v, double sign) {
   const double a[3] = {N[0] + sign * v[0], N[1] + sign * v[1], N[2] + sign * v[2]};
   const double na = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
-  const double n0 = std::sqrt(N[0] * N[0] + N[1] * N[1] + N[2] * N[2]);
   const double den = na + n0;
   if (!(den > 0)) return 0;
   const double num = sign * 2 * (N[0] * v[0] + N[1] * v[1] + N[2] * v[2]) +
@@ -45,6 +44,11 @@ GreedyOptimizer::GreedyOptimizer(const VsaSurface& s, Partition& p, GreedyOption
     listed_[s.topo.corner_edge[c]] = 1;
     list_.push_back(c);
   }
+}
+
+void GreedyOptimizer::refresh_norms() {
+  norm_.resize(p_.cluster_count());
+  for (uint32_t k = 0; k < p_.cluster_count(); ++k) norm_[k] = p_.norm(k);
 }
 
 void GreedyOptimizer::grow_clusters() {
@@ -93,8 +97,8 @@ void GreedyOptimizer::touch(std::span<const uint32_t> faces) {
 double GreedyOptimizer::gain(uint32_t f, uint32_t to) const {
   const double* v = &s_.vec[3 * size_t(f)];
   const uint32_t from = p_.label[f];
-  return norm_change(&p_.N[3 * size_t(to)], v, +1.0) +
-         norm_change(&p_.N[3 * size_t(from)], v, -1.0);
+  return norm_change(&p_.N[3 * size_t(to)], norm_[to], v, +1.0) +
+         norm_change(&p_.N[3 * size_t(from)], norm_[from], v, -1.0);
 }
 
 bool GreedyOptimizer::fan_in_cluster(uint32_t from_corner, uint32_t to_corner, uint32_t l) const {
@@ -224,6 +228,7 @@ bool GreedyOptimizer::removable(uint32_t f) {
 void GreedyOptimizer::apply(uint32_t f, uint32_t to, double drop) {
   const uint32_t from = p_.label[f];
   p_.move(s_, f, to);
+  norm_[from] = p_.norm(from), norm_[to] = p_.norm(to);
   ++clock_;
   cluster_stamp_[from] = cluster_stamp_[to] = clock_;
   ++st_.moves;
@@ -270,6 +275,7 @@ void GreedyOptimizer::evaluate(uint32_t c) {
 
 GreedyStats GreedyOptimizer::run() {
   grow_clusters();
+  refresh_norms();
   st_ = GreedyStats{};
   st_.energy_before = p_.energy();
   for (;;) {

@@ -28,10 +28,11 @@ struct GreedyOptions {
   /// beyond it the move is refused (never risking a disconnected cluster).
   uint32_t search_budget = 32;
   /// Once the queue runs dry, a cluster's boundary edges are scored again only when its proxy
-  /// normal has turned by more than this (about radians) since they were last all queued. 0:
-  /// after any change, so the result is an exact local minimum; the default skips rounds whose
-  /// possible gains are below about drift x face area.
-  double drift = 1e-3;
+  /// normal has turned by more than this (about radians) since they were last all queued (edges
+  /// next to a move are always scored again). A move that turn could have made worthwhile lowers
+  /// E by at most about 4 x drift x the face's area; 0: every change counts, and the result is an
+  /// exact local minimum.
+  double drift = 1e-2;
   /// Debug hook, called after every accepted move with the face, its old and new cluster and the
   /// predicted drop of E (squared model units). Tests use it to check every move lowers E.
   std::function<void(uint32_t face, uint32_t from, uint32_t to, double drop)> on_move;
@@ -86,6 +87,7 @@ class GreedyOptimizer {
   bool search_connected(uint32_t f, uint32_t l, std::span<const uint32_t> targets);
   void apply(uint32_t f, uint32_t to, double drop);
   void grow_clusters();
+  void refresh_norms();
 
   const VsaSurface& s_;
   Partition& p_;
@@ -100,6 +102,7 @@ class GreedyOptimizer {
   std::vector<uint32_t> checked_at_;      // per cluster: clock when its boundary was last queued
   std::vector<double> checked_normal_;    // 3 per cluster: its proxy normal then
   std::vector<uint8_t> stale_;
+  std::vector<double> norm_;  // per cluster: |N|, kept with every move
   uint32_t clock_ = 1;
   std::vector<uint32_t> visit_;  // per face: search generation
   std::vector<uint8_t> owner_;   // per face: the search wave that reached it
