@@ -97,6 +97,7 @@ std::string serialize_lot(const OctreeTexture& t) {
 OctreeTexture parse_lot(std::string_view bytes, std::string_view name, bool verify_checksums) {
   const std::string who(name);
   auto fail = [&](const std::string& why) -> void { throw InputError(who + ": " + why); };
+  if (bytes.empty()) fail("empty file");
   if (bytes.size() < 8 || std::memcmp(bytes.data(), kMagic, 8) != 0)
     fail("not a limn octree texture (.lot): wrong magic bytes");
   if (bytes.size() < kHeader)
