@@ -65,6 +65,7 @@ nlohmann::json texture_json(const OctreeTexture& t) {
       {"bytes", s.bytes},
       {"pool_words", s.pool_words},
       {"free_words", s.free_words},
+      {"free_blocks", t.free_blocks().size()},
       {"bytes_per_painted_texel", s.bytes_per_painted_texel},
       {"cube", {{"origin", {t.origin()[0], t.origin()[1], t.origin()[2]}}, {"size", t.size()}}}};
 }

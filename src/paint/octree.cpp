@@ -429,7 +429,7 @@ OctreeTextureStats OctreeTexture::stats() const {
 
 std::string OctreeTexture::check() const {
   const size_t n = pool_.size();
-  if (n < 2 || n % 2) return "the pool must hold an even number (>= 2) of words";
+  if (n < 2) return "the pool must hold at least the root's two words";
   if (n > octree::kMaxPoolWords + 2) return "the pool is larger than 2^31 words";
   if (!(size_ > 0) || !std::isfinite(size_) || !std::isfinite(origin_[0]) ||
       !std::isfinite(origin_[1]) || !std::isfinite(origin_[2]))

@@ -248,6 +248,50 @@ struct CellMap {
     out = c->s[side];
     return true;
   }
+  /// Reference trilinear lookup at the level of the leaf holding p: the 8 cells around p at that
+  /// level, each read as a nearest lookup at its centre, premultiplied, weights renormalised over
+  /// the cells with a sample facing n. False when no leaf holds p or no tap has a sample.
+  bool filtered(const float p[3], const float* n, float out[4]) const {
+    uint32_t xyz[3];
+    double u[3];
+    for (int k = 0; k < 3; ++k) {
+      u[k] = (double(p[k]) - t->origin()[k]) / t->size();
+      if (!(u[k] >= 0 && u[k] < 1)) return false;
+      xyz[k] = std::min(uint32_t(u[k] * 65536.0), 65535u);
+    }
+    int level = 0;
+    if (!leaf(xyz[0], xyz[1], xyz[2], &level)) return false;
+    double acc[5] = {0, 0, 0, 0, 0};
+    const double n_cells = double(1u << level);
+    for (int corner = 0; corner < 8; ++corner) {
+      double w = 1;
+      int64_t ic[3];
+      for (int k = 0; k < 3; ++k) {
+        const double g = u[k] * n_cells - 0.5, f = std::floor(g);
+        const int d = corner >> k & 1;
+        ic[k] = int64_t(f) + d;
+        w *= d ? g - f : 1 - (g - f);
+      }
+      bool inside = true;
+      for (int k = 0; k < 3; ++k) inside = inside && ic[k] >= 0 && ic[k] < int64_t(n_cells);
+      if (!inside || w <= 0) continue;
+      const int sh = 16 - level;
+      const uint32_t half = sh ? 1u << (sh - 1) : 0;
+      const Cell* c = leaf((uint32_t(ic[0]) << sh) + half, (uint32_t(ic[1]) << sh) + half,
+                           (uint32_t(ic[2]) << sh) + half);
+      if (!c) continue;
+      const int side = side_of(c->tag, n);
+      if (side && !c->dbl) continue;
+      const Rgba8 col = c->s[side];
+      const double a = channel(col, 3) / 255.0;
+      for (int k = 0; k < 3; ++k) acc[k] += w * a * channel(col, k) / 255.0;
+      acc[3] += w * a, acc[4] += w;
+    }
+    if (!(acc[4] > 0)) return false;
+    for (int k = 0; k < 3; ++k) out[k] = acc[3] > 0 ? float(acc[k] / acc[3]) : 0.0f;
+    out[3] = float(acc[3] / acc[4]);
+    return true;
+  }
 };
 
 /// A point uniformly inside triangle t (u, v uniform in [0,1]).

@@ -126,51 +126,6 @@ std::vector<Probe> probes(const OctreeTexture& t, const Mesh& m, std::mt19937& r
   return out;
 }
 
-// Reference trilinear at a leaf's level, from the map.
-bool reference_filtered(const test::CellMap& map, const OctreeTexture& t, const float p[3],
-                        const float* n, float out[4]) {
-  uint32_t xyz[3];
-  double u[3];
-  for (int k = 0; k < 3; ++k) {
-    u[k] = (double(p[k]) - t.origin()[k]) / t.size();
-    if (!(u[k] >= 0 && u[k] < 1)) return false;
-    xyz[k] = std::min(uint32_t(u[k] * 65536.0), 65535u);
-  }
-  int level = 0;
-  if (!map.leaf(xyz[0], xyz[1], xyz[2], &level)) return false;
-  double acc[5] = {0, 0, 0, 0, 0};
-  const double cells = double(1u << level);
-  for (int corner = 0; corner < 8; ++corner) {
-    double w = 1;
-    int64_t ic[3];
-    for (int k = 0; k < 3; ++k) {
-      const double g = u[k] * cells - 0.5, f = std::floor(g);
-      const int d = corner >> k & 1;
-      ic[k] = int64_t(f) + d;
-      w *= d ? g - f : 1 - (g - f);
-    }
-    bool inside = true;
-    for (int k = 0; k < 3; ++k) inside = inside && ic[k] >= 0 && ic[k] < int64_t(cells);
-    if (!inside || w <= 0) continue;
-    const int sh = 16 - level;
-    const uint32_t half = sh ? 1u << (sh - 1) : 0;
-    const test::CellMap::Cell* c =
-        map.leaf((uint32_t(ic[0]) << sh) + half, (uint32_t(ic[1]) << sh) + half,
-                 (uint32_t(ic[2]) << sh) + half);
-    if (!c) continue;
-    const int side = test::side_of(c->tag, n);
-    if (side && !c->dbl) continue;
-    const Rgba8 col = c->s[side];
-    const double a = channel(col, 3) / 255.0;
-    for (int k = 0; k < 3; ++k) acc[k] += w * a * channel(col, k) / 255.0;
-    acc[3] += w * a, acc[4] += w;
-  }
-  if (!(acc[4] > 0)) return false;
-  for (int k = 0; k < 3; ++k) out[k] = acc[3] > 0 ? float(acc[k] / acc[3]) : 0.0f;
-  out[3] = float(acc[3] / acc[4]);
-  return true;
-}
-
 void expect_lookups_match(const OctreeTexture& t, const Mesh& m, std::mt19937& rng) {
   const test::CellMap map(t);
   std::vector<Probe> pr = probes(t, m, rng, 12000);
@@ -188,7 +143,7 @@ void expect_lookups_match(const OctreeTexture& t, const Mesh& m, std::mt19937& r
     ASSERT_EQ(want, fresh);
     found += w;
     float rf[4], lf[4];
-    const bool hr = reference_filtered(map, t, q.p, n, rf);
+    const bool hr = map.filtered(q.p, n, rf);
     if (hr) {
       ASSERT_TRUE(random_order.filtered(q.p, n, 0.0f, lf));
       for (int k = 0; k < 4; ++k) ASSERT_NEAR(rf[k], lf[k], 2e-4) << k;
