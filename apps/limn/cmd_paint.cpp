@@ -109,6 +109,10 @@ void run_paint(const PaintOpts& o) {
   PaintHistory history;
   const ScriptResult r = run_strokes(tex, surface, script, history);
   const double t_paint = sw.lap();
+  // Saved compact: no free blocks, each subtree in one stretch of the pool (the undo history
+  // ends with this run anyway).
+  history.clear();
+  tex.compact();
   save_lot(tex, o.out);
   const double t_save = sw.lap();
 

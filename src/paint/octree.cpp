@@ -91,18 +91,19 @@ GeneralNode decode_general(std::span<const uint32_t> pool, uint32_t ptr, uint32_
   for (int c = 0; c < 8; ++c)
     if (b >> c & 1) n.kind[c] = CellKind::brick, n.ptr[c] = pool[pos++];
   n.avg = pool[pos++];
+  int k = 0;
+  for (int c = 0; c < 8; ++c)
+    if (l >> c & 1) {
+      n.leaf[c].tag = uint8_t(pool[pos + size_t(k / 8)] >> (4 * (k % 8)) & 15u);
+      ++k;
+    }
+  pos += size_t(k + 7) / 8;
   for (int c = 0; c < 8; ++c)
     if (l >> c & 1) {
       n.kind[c] = CellKind::leaf;
       n.leaf[c].s[0] = pool[pos++];
       n.leaf[c].dbl = d >> c & 1;
       if (n.leaf[c].dbl) n.leaf[c].s[1] = pool[pos++];
-    }
-  int k = 0;
-  for (int c = 0; c < 8; ++c)
-    if (l >> c & 1) {
-      n.leaf[c].tag = uint8_t(pool[pos + size_t(k / 8)] >> (4 * (k % 8)) & 15u);
-      ++k;
     }
   return n;
 }
@@ -122,11 +123,6 @@ uint32_t encode_general(const GeneralNode& n, std::vector<uint32_t>& out) {
   for (int c = 0; c < 8; ++c)
     if (n.kind[c] == CellKind::brick) out.push_back(n.ptr[c]);
   out.push_back(n.avg);
-  for (int c = 0; c < 8; ++c)
-    if (n.kind[c] == CellKind::leaf) {
-      out.push_back(n.leaf[c].s[0]);
-      if (n.leaf[c].dbl) out.push_back(n.leaf[c].s[1]);
-    }
   const size_t tag0 = out.size();
   int k = 0;
   for (int c = 0; c < 8; ++c)
@@ -134,6 +130,11 @@ uint32_t encode_general(const GeneralNode& n, std::vector<uint32_t>& out) {
       if (k % 8 == 0) out.push_back(0);
       out[tag0 + size_t(k / 8)] |= uint32_t(n.leaf[c].tag & 15u) << (4 * (k % 8));
       ++k;
+    }
+  for (int c = 0; c < 8; ++c)
+    if (n.kind[c] == CellKind::leaf) {
+      out.push_back(n.leaf[c].s[0]);
+      if (n.leaf[c].dbl) out.push_back(n.leaf[c].s[1]);
     }
   if (out.size() % 2) out.push_back(0);
   return info;
@@ -149,17 +150,18 @@ Brick decode_brick(std::span<const uint32_t> pool, uint32_t word) {
     pos += 2;
   }
   b.avg = pool[pos++];
-  for (int m = 0; m < 64; ++m)
-    if (b.mask >> m & 1) {
-      b.cell[m].s[0] = pool[pos++];
-      b.cell[m].dbl = b.dbl >> m & 1;
-      if (b.cell[m].dbl) b.cell[m].s[1] = pool[pos++];
-    }
   int k = 0;
   for (int m = 0; m < 64; ++m)
     if (b.mask >> m & 1) {
       b.cell[m].tag = uint8_t(pool[pos + size_t(k / 8)] >> (4 * (k % 8)) & 15u);
       ++k;
+    }
+  pos += size_t(k + 7) / 8;
+  for (int m = 0; m < 64; ++m)
+    if (b.mask >> m & 1) {
+      b.cell[m].s[0] = pool[pos++];
+      b.cell[m].dbl = b.dbl >> m & 1;
+      if (b.cell[m].dbl) b.cell[m].s[1] = pool[pos++];
     }
   return b;
 }
@@ -173,11 +175,6 @@ uint32_t encode_brick(const Brick& b, std::vector<uint32_t>& out) {
   out.push_back(uint32_t(b.mask >> 32));
   if (dbl) out.push_back(uint32_t(dbl)), out.push_back(uint32_t(dbl >> 32));
   out.push_back(b.avg);
-  for (int m = 0; m < 64; ++m)
-    if (b.mask >> m & 1) {
-      out.push_back(b.cell[m].s[0]);
-      if (b.cell[m].dbl) out.push_back(b.cell[m].s[1]);
-    }
   const size_t tag0 = out.size();
   int k = 0;
   for (int m = 0; m < 64; ++m)
@@ -185,6 +182,11 @@ uint32_t encode_brick(const Brick& b, std::vector<uint32_t>& out) {
       if (k % 8 == 0) out.push_back(0);
       out[tag0 + size_t(k / 8)] |= uint32_t(b.cell[m].tag & 15u) << (4 * (k % 8));
       ++k;
+    }
+  for (int m = 0; m < 64; ++m)
+    if (b.mask >> m & 1) {
+      out.push_back(b.cell[m].s[0]);
+      if (b.cell[m].dbl) out.push_back(b.cell[m].s[1]);
     }
   return dbl ? octree::kBrickDoubleFlag : 0;
 }
@@ -302,7 +304,8 @@ std::vector<std::pair<uint32_t, uint32_t>> OctreeTexture::free_blocks() const {
 }
 
 void OctreeTexture::to_unit(const float p[3], double u[3]) const {
-  for (int k = 0; k < 3; ++k) u[k] = (double(p[k]) - double(origin_[k])) / double(size_);
+  const double scale = 65536.0 / double(size_);
+  for (int k = 0; k < 3; ++k) u[k] = (double(p[k]) - double(origin_[k])) * scale / 65536.0;
 }
 
 void OctreeTexture::cell_center(int level, uint32_t x, uint32_t y, uint32_t z, float out[3]) const {
@@ -341,7 +344,8 @@ struct SampleWalker {
 
   void brick(uint32_t word, int level, uint32_t x, uint32_t y, uint32_t z) {
     const Brick b = decode_brick(pool, word);
-    size_t pos = (word & ~octree::kBrickDoubleFlag) + 2 + (b.dbl ? 2 : 0) + 1;
+    size_t pos = (word & ~octree::kBrickDoubleFlag) + 2 + (b.dbl ? 2 : 0) + 1 +
+                 (size_t(popc64(b.mask)) + 7) / 8;
     for (int m = 0; m < 64; ++m) {
       if (!(b.mask >> m & 1)) continue;
       const int c1 = m >> 3, c2 = m & 7;
@@ -356,8 +360,9 @@ struct SampleWalker {
   void general(uint32_t ptr, uint32_t info, int level, uint32_t x, uint32_t y, uint32_t z) {
     if (octree::occupied(info) == 0) return;
     const GeneralNode n = decode_general(pool, ptr, info);
-    size_t sample =
-        ptr + 2 * size_t(popc(octree::generals(info))) + size_t(popc(octree::bricks(info))) + 1;
+    size_t sample = ptr + 2 * size_t(popc(octree::generals(info))) +
+                    size_t(popc(octree::bricks(info))) + 1 +
+                    (size_t(popc(octree::leaves(info))) + 7) / 8;
     for (int c = 0; c < 8; ++c) {
       const uint32_t cx = 2 * x + uint32_t(c & 1), cy = 2 * y + uint32_t(c >> 1 & 1),
                      cz = 2 * z + uint32_t(c >> 2 & 1);
@@ -425,6 +430,49 @@ OctreeTextureStats OctreeTexture::stats() const {
   s.bytes = 4 * s.pool_words;
   s.bytes_per_painted_texel = s.painted_samples ? double(s.bytes) / double(s.painted_samples) : 0;
   return s;
+}
+
+void OctreeTexture::compact() {
+  if (recording_) throw std::logic_error("OctreeTexture::compact while a stroke is recorded");
+  std::vector<uint32_t> out = {0, 0};
+  std::vector<std::vector<uint32_t>> gaps;
+  std::vector<uint32_t> words;
+  // Reserves a block; general blocks start at even words (a one-word gap becomes a free block).
+  auto reserve = [&](size_t n, bool brick) {
+    if (!brick && out.size() % 2) {
+      if (gaps.size() <= block_class(1, true)) gaps.resize(block_class(1, true) + 1);
+      gaps[block_class(1, true)].push_back(uint32_t(out.size()));
+      out.push_back(0);
+    }
+    const size_t at = out.size();
+    out.resize(at + n, 0);
+    return uint32_t(at);
+  };
+  auto copy_brick = [&](uint32_t word) {
+    const Brick b = decode_brick(pool_, word);
+    const uint32_t n = brick_block_words(b.mask, b.dbl), from = word & ~octree::kBrickDoubleFlag;
+    const uint32_t at = reserve(n, true);
+    std::copy_n(pool_.begin() + from, n, out.begin() + at);
+    return at | (word & octree::kBrickDoubleFlag);
+  };
+  // Returns the node's new address.
+  auto copy_general = [&](auto&& self, uint32_t ptr, uint32_t info) -> uint32_t {
+    GeneralNode n = decode_general(pool_, ptr, info);
+    const uint32_t at = reserve(general_block_words(info), false);
+    for (int c = 0; c < 8; ++c)
+      if (n.kind[c] == CellKind::general) n.ptr[c] = self(self, n.ptr[c], n.info[c]);
+    for (int c = 0; c < 8; ++c)
+      if (n.kind[c] == CellKind::brick) n.ptr[c] = copy_brick(n.ptr[c]);
+    encode_general(n, words);
+    std::copy(words.begin(), words.end(), out.begin() + at);
+    return at;
+  };
+  if (octree::occupied(pool_[1])) {
+    out[0] = copy_general(copy_general, pool_[0], pool_[1]);
+    out[1] = pool_[1];
+  }
+  pool_ = std::move(out);
+  free_ = std::move(gaps);
 }
 
 std::string OctreeTexture::check() const {
@@ -499,10 +547,10 @@ std::string OctreeTexture::check() const {
     const size_t words = general_block_words(f.info);
     if (!claim(f.ptr, words, true, "a general node's")) return err;
     const GeneralNode node = decode_general(pool_, f.ptr, f.info);
-    const size_t tags = f.ptr + 2 * size_t(popc(octree::generals(f.info))) + size_t(popc(b)) + 1 +
-                        size_t(popc(l)) + size_t(popc(d));
+    const size_t tags = f.ptr + 2 * size_t(popc(octree::generals(f.info))) + size_t(popc(b)) + 1;
     if (!check_tags(tags, size_t(popc(l)), "a general node")) return err;
-    if (words > tags - f.ptr + (size_t(popc(l)) + 7) / 8 && pool_[f.ptr + words - 1] != 0)
+    if (words > tags - f.ptr + (size_t(popc(l)) + 7) / 8 + size_t(popc(l)) + size_t(popc(d)) &&
+        pool_[f.ptr + words - 1] != 0)
       return "a general node at word " + std::to_string(f.ptr) + " has a non-zero pad word";
     for (int c = 0; c < 8; ++c) {
       if (node.kind[c] == CellKind::leaf && !check_double_tags(node.leaf[c], f.ptr, "a node"))
@@ -525,7 +573,7 @@ std::string OctreeTexture::check() const {
       const size_t bw = brick_block_words(mask, dbl);
       if (!claim(bp, bw, false, "a brick's")) return err;
       const size_t cells = size_t(popc64(mask));
-      const size_t btags = bp + 2 + (dbl ? 2 : 0) + 1 + cells + size_t(popc64(dbl));
+      const size_t btags = bp + 2 + (dbl ? 2 : 0) + 1;
       if (!check_tags(btags, cells, "a brick")) return err;
       const Brick br = decode_brick(pool_, w);
       for (int m = 0; m < 64; ++m)

@@ -34,16 +34,6 @@ inline uint32_t octant(uint32_t x, uint32_t y, uint32_t z, int shift) {
   return (x >> shift & 1u) | (y >> shift & 1u) << 1 | (z >> shift & 1u) << 2;
 }
 
-// World point -> integer coordinates at kMaxDepth; false outside the cube.
-inline bool to_int(const OctreeTexture& t, const float p[3], uint32_t xyz[3]) {
-  for (int k = 0; k < 3; ++k) {
-    const double u = (double(p[k]) - double(t.origin()[k])) / double(t.size());
-    if (!(u >= 0.0 && u < 1.0)) return false;
-    xyz[k] = std::min(uint32_t(u * double(1u << kD)), (1u << kD) - 1);
-  }
-  return true;
-}
-
 Rgba8 premul_mean(const uint32_t* s, size_t count) {
   double r = 0, g = 0, b = 0, a = 0;
   for (size_t i = 0; i < count; ++i) {
@@ -55,11 +45,15 @@ Rgba8 premul_mean(const uint32_t* s, size_t count) {
   return pack_rgba8(q(r / a), q(g / a), q(b / a), q(a / double(count)));
 }
 
-}  // namespace
+// The walk itself, written once and compiled twice: with the popcnt instruction where the CPU
+// has it (a dozen popcounts per lookup; without -mpopcnt GCC calls a library routine for each),
+// and for any x86-64 otherwise.
+#define LIMN_WALK __attribute__((always_inline)) inline
 
-bool OctreeSampler::brick_leaf(uint32_t word, int level, uint32_t x, uint32_t y, uint32_t z,
-                               const float* n, Rgba8& out, int* leaf_level) const {
-  const uint32_t* pool = t_->words().data();
+using Cache = OctreeSampler::Cache;
+
+LIMN_WALK bool brick_leaf(const uint32_t* pool, uint32_t word, int level, uint32_t x, uint32_t y,
+                          uint32_t z, const float* n, Rgba8& out, int* leaf_level) {
   const uint32_t bp = word & ~kFlag;
   const uint64_t mask = uint64_t(pool[bp]) | uint64_t(pool[bp + 1]) << 32;
   const int m = int(octant(x, y, z, kD - 1 - level) * 8 + octant(x, y, z, kD - 2 - level));
@@ -69,29 +63,54 @@ bool OctreeSampler::brick_leaf(uint32_t word, int level, uint32_t x, uint32_t y,
   uint64_t dbl = 0;
   uint32_t base = bp + 3;
   if (word & kFlag) dbl = uint64_t(pool[bp + 2]) | uint64_t(pool[bp + 3]) << 32, base = bp + 5;
+  // Tags first, then samples: the mask, the tag and most samples share a cache line.
   const uint32_t r = uint32_t(std::popcount(mask & below));
   const uint32_t si = r + uint32_t(std::popcount(dbl & below));
-  const uint32_t tags = base + uint32_t(std::popcount(mask)) + uint32_t(std::popcount(dbl));
-  const uint32_t tag = pool[tags + r / 8] >> (4 * (r % 8)) & 15u;
+  const uint32_t tag = pool[base + r / 8] >> (4 * (r % 8)) & 15u;
   const int side = side_of(tag, n);
   if (side && !(dbl >> m & 1)) return false;
-  out = pool[base + si + uint32_t(side)];
+  out = pool[base + (uint32_t(std::popcount(mask)) + 7) / 8 + si + uint32_t(side)];
   return true;
 }
 
-bool OctreeSampler::nearest_at(uint32_t x, uint32_t y, uint32_t z, const float* n, Rgba8& out,
-                               int* level) {
-  const uint32_t* pool = t_->words().data();
-  out = t_->background();
+// Makes `s` the most recent slot.
+LIMN_WALK void remember(Cache& cache, const OctreeSampler::CacheSlot& s) {
+  cache.slot[3] = cache.slot[2], cache.slot[2] = cache.slot[1], cache.slot[1] = cache.slot[0];
+  cache.slot[0] = s;
+}
+
+LIMN_WALK bool walk_nearest(const uint32_t* pool, const OctreeIndex* index, Cache& cache,
+                            uint32_t x, uint32_t y, uint32_t z, const float* n, Rgba8& out,
+                            int* level) {
   uint32_t ptr, info;
   int l;
-  if (cache_level_ >= 0 && (x >> (kD - cache_level_)) == cache_x_ &&
-      (y >> (kD - cache_level_)) == cache_y_ && (z >> (kD - cache_level_)) == cache_z_) {
-    if (cache_brick_) return brick_leaf(cache_ptr_, cache_level_, x, y, z, n, out, level);
-    ptr = cache_ptr_, info = cache_info_, l = cache_level_;
+  int hit = -1;
+  for (int k = 0; k < 4; ++k) {
+    const OctreeSampler::CacheSlot& s = cache.slot[k];
+    if (s.level >= 0 && (x >> (kD - s.level)) == s.x && (y >> (kD - s.level)) == s.y &&
+        (z >> (kD - s.level)) == s.z) {
+      hit = k;
+      break;
+    }
+  }
+  if (hit >= 0) {
+    if (hit > 0) std::swap(cache.slot[0], cache.slot[hit]);
+    const OctreeSampler::CacheSlot& s = cache.slot[0];
+    if (s.brick) return brick_leaf(pool, s.ptr, s.level, x, y, z, n, out, level);
+    ptr = s.ptr, info = s.info, l = s.level;
+  } else if (index) {
+    const int il = index->level();
+    const OctreeIndex::Entry& e = index->at(x >> (kD - il), y >> (kD - il), z >> (kD - il));
+    if (e.brick) {
+      remember(cache, {e.level, true, e.ptr, 0, x >> (kD - e.level), y >> (kD - e.level),
+                       z >> (kD - e.level)});
+      return brick_leaf(pool, e.ptr, e.level, x, y, z, n, out, level);
+    }
+    ptr = e.ptr, info = e.info, l = e.level;
   } else {
     ptr = pool[0], info = pool[1], l = 0;
   }
+  const int start_level = l;
   for (;;) {
     const uint32_t bit = 1u << octant(x, y, z, kD - 1 - l);
     if (level) *level = l + 1;
@@ -107,33 +126,161 @@ bool OctreeSampler::nearest_at(uint32_t x, uint32_t y, uint32_t z, const float* 
     const uint32_t after_gen = ptr + 2 * uint32_t(std::popcount(gen));
     if (br & bit) {
       const uint32_t w = pool[after_gen + uint32_t(std::popcount(br & below))];
-      cache_level_ = l + 1, cache_brick_ = true, cache_ptr_ = w;
-      cache_x_ = x >> (kD - l - 1), cache_y_ = y >> (kD - l - 1), cache_z_ = z >> (kD - l - 1);
-      return brick_leaf(w, l + 1, x, y, z, n, out, level);
+      remember(cache, {l + 1, true, w, 0, x >> (kD - l - 1), y >> (kD - l - 1), z >> (kD - l - 1)});
+      return brick_leaf(pool, w, l + 1, x, y, z, n, out, level);
     }
-    // A leaf of this general node: remember the node for the next lookup.
-    cache_level_ = l, cache_brick_ = false, cache_ptr_ = ptr, cache_info_ = info;
-    cache_x_ = l ? x >> (kD - l) : 0, cache_y_ = l ? y >> (kD - l) : 0;
-    cache_z_ = l ? z >> (kD - l) : 0;
+    // A leaf of this general node: remember the node (unless it is the cached one we began at).
+    if (hit < 0 || l != start_level)
+      remember(cache, {l, false, ptr, info, x >> (kD - l), y >> (kD - l), z >> (kD - l)});
     const uint32_t lf = octree::leaves(info), dbl = octree::doubles(info);
     const uint32_t base = after_gen + uint32_t(std::popcount(br)) + 1;
     const uint32_t r = uint32_t(std::popcount(lf & below));
     const uint32_t si = r + uint32_t(std::popcount(dbl & below));
-    const uint32_t tags = base + uint32_t(std::popcount(lf)) + uint32_t(std::popcount(dbl));
-    const uint32_t tag = pool[tags + r / 8] >> (4 * (r % 8)) & 15u;
+    const uint32_t tag = pool[base + r / 8] >> (4 * (r % 8)) & 15u;
     const int side = side_of(tag, n);
     if (side && !(dbl & bit)) return false;
-    out = pool[base + si + uint32_t(side)];
+    out = pool[base + (uint32_t(std::popcount(lf)) + 7) / 8 + si + uint32_t(side)];
     return true;
   }
 }
 
+// The 8 leaf-level taps of a filtered lookup, accumulated premultiplied (acc: rgb, alpha,
+// weight), each a nearest walk sharing the cache.
+LIMN_WALK bool walk_trilinear(const uint32_t* pool, const OctreeIndex* index, Cache& cache,
+                              const double u[3], int level, const float* n, float acc[5]) {
+  const double cells = double(1u << level);
+  int64_t i0[3];
+  double t[3];
+  for (int k = 0; k < 3; ++k) {
+    const double g = u[k] * cells - 0.5;
+    const double f = std::floor(g);
+    i0[k] = int64_t(f), t[k] = g - f;
+  }
+  const int64_t hi = int64_t(1) << level;
+  const int shift = kD - level;
+  const uint32_t half = shift > 0 ? 1u << (shift - 1) : 0;
+  bool any = false;
+  for (int corner = 0; corner < 8; ++corner) {
+    int64_t ic[3];
+    double w = 1;
+    for (int k = 0; k < 3; ++k) {
+      const int d = corner >> k & 1;
+      ic[k] = i0[k] + d;
+      w *= d ? t[k] : 1 - t[k];
+    }
+    if (w <= 0) continue;
+    if (ic[0] < 0 || ic[1] < 0 || ic[2] < 0 || ic[0] >= hi || ic[1] >= hi || ic[2] >= hi) continue;
+    // The tap's centre at kMaxDepth resolution.
+    const uint32_t x = (uint32_t(ic[0]) << shift) + half, y = (uint32_t(ic[1]) << shift) + half,
+                   z = (uint32_t(ic[2]) << shift) + half;
+    Rgba8 c;
+    if (!walk_nearest(pool, index, cache, x, y, z, n, c, nullptr)) continue;
+    const float a = float(channel(c, 3)) / 255.0f, fw = float(w);
+    acc[0] += fw * a * float(channel(c, 0)) / 255.0f;
+    acc[1] += fw * a * float(channel(c, 1)) / 255.0f;
+    acc[2] += fw * a * float(channel(c, 2)) / 255.0f;
+    acc[3] += fw * a;
+    acc[4] += fw;
+    any = true;
+  }
+  return any;
+}
+
+__attribute__((target("popcnt"))) bool walk_trilinear_popcnt(const uint32_t* pool,
+                                                             const OctreeIndex* index, Cache& cache,
+                                                             const double u[3], int level,
+                                                             const float* n, float acc[5]) {
+  return walk_trilinear(pool, index, cache, u, level, n, acc);
+}
+
+bool walk_trilinear_generic(const uint32_t* pool, const OctreeIndex* index, Cache& cache,
+                            const double u[3], int level, const float* n, float acc[5]) {
+  return walk_trilinear(pool, index, cache, u, level, n, acc);
+}
+
+__attribute__((target("popcnt"))) bool walk_nearest_popcnt(const uint32_t* pool,
+                                                           const OctreeIndex* index, Cache& cache,
+                                                           uint32_t x, uint32_t y, uint32_t z,
+                                                           const float* n, Rgba8& out, int* level) {
+  return walk_nearest(pool, index, cache, x, y, z, n, out, level);
+}
+
+bool walk_nearest_generic(const uint32_t* pool, const OctreeIndex* index, Cache& cache, uint32_t x,
+                          uint32_t y, uint32_t z, const float* n, Rgba8& out, int* level) {
+  return walk_nearest(pool, index, cache, x, y, z, n, out, level);
+}
+
+const bool kPopcnt = __builtin_cpu_supports("popcnt");
+
+}  // namespace
+
+OctreeIndex::OctreeIndex(const OctreeTexture& t, int level) : level_(std::clamp(level, 1, 7)) {
+  entries_.resize(size_t(1) << (3 * level_));
+  const auto pool = t.words();
+  // Fills the entries of the cell (l, x, y, z) with e.
+  auto fill = [&](int l, uint32_t x, uint32_t y, uint32_t z, const Entry& e) {
+    const int sh = level_ - l;
+    for (uint32_t k = z << sh; k < (z + 1) << sh; ++k)
+      for (uint32_t j = y << sh; j < (y + 1) << sh; ++j)
+        for (uint32_t i = x << sh; i < (x + 1) << sh; ++i)
+          entries_[(size_t(k) << (2 * level_)) | (size_t(j) << level_) | i] = e;
+  };
+  struct Frame {
+    uint32_t ptr, info;
+    int level;
+    uint32_t x, y, z;
+  };
+  std::vector<Frame> stack = {{pool[0], pool[1], 0, 0, 0, 0}};
+  while (!stack.empty()) {
+    const Frame f = stack.back();
+    stack.pop_back();
+    const Entry here{f.ptr, f.info, int8_t(f.level), 0};
+    if (f.level == level_ || octree::occupied(f.info) == 0) {
+      fill(f.level, f.x, f.y, f.z, here);
+      continue;
+    }
+    const uint32_t gen = octree::generals(f.info), br = octree::bricks(f.info);
+    uint32_t gi = f.ptr, bi = f.ptr + 2 * uint32_t(std::popcount(gen));
+    for (uint32_t c = 0; c < 8; ++c) {
+      const uint32_t cx = 2 * f.x + (c & 1), cy = 2 * f.y + (c >> 1 & 1), cz = 2 * f.z + (c >> 2);
+      if (gen >> c & 1) {
+        stack.push_back({pool[gi], pool[gi + 1], f.level + 1, cx, cy, cz});
+        gi += 2;
+      } else if (br >> c & 1) {
+        fill(f.level + 1, cx, cy, cz, Entry{pool[bi++], 0, int8_t(f.level + 1), 1});
+      } else {
+        fill(f.level + 1, cx, cy, cz, here);  // a leaf or nothing: resolved at this node
+      }
+    }
+  }
+}
+
+OctreeSampler::OctreeSampler(const OctreeTexture& t, const OctreeIndex* index)
+    : t_(&t), index_(index) {
+  for (int k = 0; k < 3; ++k) origin_[k] = t.origin()[k];
+  scale_ = double(1u << kD) / double(t.size());
+}
+
+bool OctreeSampler::nearest_at(uint32_t x, uint32_t y, uint32_t z, const float* n, Rgba8& out,
+                               int* level) {
+  out = t_->background();
+  const uint32_t* pool = t_->words().data();
+  return kPopcnt ? walk_nearest_popcnt(pool, index_, cache_, x, y, z, n, out, level)
+                 : walk_nearest_generic(pool, index_, cache_, x, y, z, n, out, level);
+}
+
 bool OctreeSampler::nearest(const float p[3], const float* n, Rgba8& out, int* level) {
   uint32_t c[3];
-  if (!to_int(*t_, p, c)) {
-    out = t_->background();
-    if (level) *level = 0;
-    return false;
+  for (int k = 0; k < 3; ++k) {
+    // Divided, not multiplied by a reciprocal: the cell a point falls in must be the one
+    // u = (p - origin) / size names, to the last bit.
+    const double u = (double(p[k]) - origin_[k]) * scale_;
+    if (!(u >= 0.0 && u < double(1u << kD))) {
+      out = t_->background();
+      if (level) *level = 0;
+      return false;
+    }
+    c[k] = uint32_t(u);
   }
   return nearest_at(c[0], c[1], c[2], n, out, level);
 }
@@ -183,20 +330,20 @@ bool OctreeSampler::cell_value(uint32_t x, uint32_t y, uint32_t z, int level, co
         const uint64_t hi = c1 == 7 ? ~uint64_t(0) : (uint64_t(1) << (8 * c1 + 8)) - 1;
         const uint32_t first = uint32_t(std::popcount(mask & lo) + std::popcount(dbl & lo));
         const uint32_t last = uint32_t(std::popcount(mask & hi) + std::popcount(dbl & hi));
-        out = premul_mean(pool + bp + hdr + 1 + first, last - first);
+        out =
+            premul_mean(pool + bp + hdr + 1 + (std::popcount(mask) + 7) / 8 + first, last - first);
         return true;
       }
-      return brick_leaf(w, l + 1, x, y, z, n, out, nullptr);
+      return brick_leaf(pool, w, l + 1, x, y, z, n, out, nullptr);
     }
     const uint32_t lf = octree::leaves(info), dbl = octree::doubles(info);
     const uint32_t base = after_gen + uint32_t(std::popcount(br)) + 1;
     const uint32_t r = uint32_t(std::popcount(lf & below));
     const uint32_t si = r + uint32_t(std::popcount(dbl & below));
-    const uint32_t tags = base + uint32_t(std::popcount(lf)) + uint32_t(std::popcount(dbl));
-    const uint32_t tag = pool[tags + r / 8] >> (4 * (r % 8)) & 15u;
+    const uint32_t tag = pool[base + r / 8] >> (4 * (r % 8)) & 15u;
     const int side = side_of(tag, n);
     if (side && !(dbl & bit)) return false;
-    out = pool[base + si + uint32_t(side)];
+    out = pool[base + (uint32_t(std::popcount(lf)) + 7) / 8 + si + uint32_t(side)];
     return true;
   }
 }
@@ -204,6 +351,11 @@ bool OctreeSampler::cell_value(uint32_t x, uint32_t y, uint32_t z, int level, co
 // Accumulates the 8 taps around u at `level`: acc = premultiplied rgb, alpha, weight.
 bool OctreeSampler::trilinear(const double u[3], int level, const float* n, bool averages,
                               float acc[5]) {
+  const uint32_t* pool = t_->words().data();
+  if (!averages)
+    return kPopcnt ? walk_trilinear_popcnt(pool, index_, cache_, u, level, n, acc)
+                   : walk_trilinear_generic(pool, index_, cache_, u, level, n, acc);
+  // Mip levels (node averages): not the hot path.
   const double cells = double(1u << level);
   int64_t i0[3];
   double t[3];
@@ -214,6 +366,7 @@ bool OctreeSampler::trilinear(const double u[3], int level, const float* n, bool
   }
   const int64_t hi = int64_t(1) << level;
   const int shift = kD - level;
+  const uint32_t half = shift > 0 ? 1u << (shift - 1) : 0;
   bool any = false;
   for (int corner = 0; corner < 8; ++corner) {
     int64_t ic[3];
@@ -225,14 +378,10 @@ bool OctreeSampler::trilinear(const double u[3], int level, const float* n, bool
     }
     if (w <= 0) continue;
     if (ic[0] < 0 || ic[1] < 0 || ic[2] < 0 || ic[0] >= hi || ic[1] >= hi || ic[2] >= hi) continue;
-    // The tap's centre at kMaxDepth resolution.
-    const uint32_t half = shift > 0 ? 1u << (shift - 1) : 0;
     const uint32_t x = (uint32_t(ic[0]) << shift) + half, y = (uint32_t(ic[1]) << shift) + half,
                    z = (uint32_t(ic[2]) << shift) + half;
     Rgba8 c;
-    const bool ok =
-        averages ? cell_value(x, y, z, level, n, c) : nearest_at(x, y, z, n, c, nullptr);
-    if (!ok) continue;
+    if (!cell_value(x, y, z, level, n, c)) continue;
     const float a = float(channel(c, 3)) / 255.0f, fw = float(w);
     acc[0] += fw * a * float(channel(c, 0)) / 255.0f;
     acc[1] += fw * a * float(channel(c, 1)) / 255.0f;
@@ -247,7 +396,7 @@ bool OctreeSampler::trilinear(const double u[3], int level, const float* n, bool
 bool OctreeSampler::filtered(const float p[3], const float* n, float footprint, float rgba[4]) {
   rgba[0] = rgba[1] = rgba[2] = rgba[3] = 0;
   double u[3];
-  t_->to_unit(p, u);
+  for (int k = 0; k < 3; ++k) u[k] = (double(p[k]) - origin_[k]) * scale_ / double(1u << kD);
   if (!(u[0] >= 0 && u[0] < 1 && u[1] >= 0 && u[1] < 1 && u[2] >= 0 && u[2] < 1)) return false;
   Rgba8 c;
   int leaf_level = 0;
@@ -281,6 +430,108 @@ bool OctreeSampler::filtered(const float p[3], const float* n, float footprint, 
     for (int k = 0; k < 3; ++k) rgba[k] = std::clamp(acc[k] / acc[3], 0.0f, 1.0f);
   rgba[3] = std::clamp(alpha, 0.0f, 1.0f);
   return true;
+}
+
+void OctreeSampler::prefetch_group(const float* p, size_t count) {
+  uint32_t xyz[3 * 16];
+  size_t m = 0;
+  for (size_t i = 0; i < count; ++i) {
+    bool inside = true;
+    for (int k = 0; k < 3; ++k) {
+      const double u = (double(p[3 * i + size_t(k)]) - origin_[k]) * scale_;
+      inside = inside && u >= 0.0 && u < double(1u << kD);
+      xyz[3 * m + size_t(k)] = inside ? uint32_t(u) : 0;
+    }
+    m += inside;
+  }
+  prefetch_coords(xyz, m);
+}
+
+void OctreeSampler::prefetch_coords(const uint32_t* xyz, size_t count) {
+  // Walk state per point: the node to read next (a general node, or a brick).
+  struct Walk {
+    uint32_t ptr, info;
+    int level;
+    bool brick, live, pending;
+  };
+  constexpr size_t kGroup = 32;
+  const uint32_t* pool = t_->words().data();
+  for (size_t g = 0; g < count; g += kGroup) {
+    const size_t m = std::min(kGroup, count - g);
+    const uint32_t* c = xyz + 3 * g;
+    Walk w[kGroup];
+    for (size_t i = 0; i < m; ++i) {
+      Walk& s = w[i];
+      s.live = true, s.brick = false, s.pending = false;
+      if (index_) {
+        const int il = index_->level();
+        __builtin_prefetch(&index_->at(c[3 * i] >> (kD - il), c[3 * i + 1] >> (kD - il),
+                                       c[3 * i + 2] >> (kD - il)));
+        s.pending = true;  // the entry is read next round, once it has arrived
+      } else {
+        s.ptr = pool[0], s.info = pool[1], s.level = 0;
+      }
+    }
+    for (int round = 0; round <= kD + 1; ++round) {
+      bool any = false;
+      for (size_t i = 0; i < m; ++i) {
+        Walk& s = w[i];
+        if (!s.live) continue;
+        const uint32_t x = c[3 * i], y = c[3 * i + 1], z = c[3 * i + 2];
+        if (s.pending) {
+          const int il = index_->level();
+          const OctreeIndex::Entry& e = index_->at(x >> (kD - il), y >> (kD - il), z >> (kD - il));
+          s.ptr = e.ptr, s.info = e.info, s.level = e.level, s.brick = e.brick, s.pending = false;
+        } else if (s.brick) {
+          s.live = false;  // its block was fetched last round
+          continue;
+        } else {
+          const uint32_t bit = 1u << octant(x, y, z, kD - 1 - s.level);
+          const uint32_t gen = octree::generals(s.info), br = octree::bricks(s.info);
+          if (gen & bit) {
+            const uint32_t at = s.ptr + 2 * uint32_t(std::popcount(gen & (bit - 1)));
+            s.ptr = pool[at], s.info = pool[at + 1], ++s.level;
+          } else if (br & bit) {
+            s.ptr = pool[s.ptr + 2 * uint32_t(std::popcount(gen)) +
+                         uint32_t(std::popcount(br & (bit - 1)))];
+            s.brick = true, ++s.level;
+          } else {
+            s.live = false;  // a leaf or nothing: in the block already fetched
+            continue;
+          }
+        }
+        const uint32_t at = s.brick ? (s.ptr & ~kFlag) : s.ptr;
+        __builtin_prefetch(pool + at);
+        if (s.brick) __builtin_prefetch(pool + at + 16);  // mask, tags, samples: two lines
+        any = true;
+      }
+      if (!any) break;
+    }
+  }
+}
+
+void OctreeSampler::nearest_batch(const float* p, const float* n, size_t count, Rgba8* out,
+                                  uint8_t* found) {
+  for (size_t g = 0; g < count; g += 16) {
+    const size_t m = std::min<size_t>(16, count - g);
+    prefetch_group(p + 3 * g, m);
+    for (size_t i = g; i < g + m; ++i) {
+      const bool f = nearest(p + 3 * i, n ? n + 3 * i : nullptr, out[i]);
+      if (found) found[i] = f;
+    }
+  }
+}
+
+void OctreeSampler::filtered_batch(const float* p, const float* n, size_t count, float footprint,
+                                   float* rgba, uint8_t* found) {
+  for (size_t g = 0; g < count; g += 16) {
+    const size_t m = std::min<size_t>(16, count - g);
+    prefetch_group(p + 3 * g, m);
+    for (size_t i = g; i < g + m; ++i) {
+      const bool f = filtered(p + 3 * i, n ? n + 3 * i : nullptr, footprint, rgba + 4 * i);
+      if (found) found[i] = f;
+    }
+  }
 }
 
 bool lookup_nearest(const OctreeTexture& t, const float p[3], const float* n, Rgba8& out) {

@@ -236,10 +236,11 @@ struct CellMap {
   bool nearest(const float p[3], const float* n, Rgba8& out) const {
     out = t->background();
     uint32_t xyz[3];
+    // The documented mapping: level-16 cell floor((p - origin) * (65536 / size)).
     for (int k = 0; k < 3; ++k) {
-      const double u = (double(p[k]) - double(t->origin()[k])) / double(t->size());
-      if (!(u >= 0 && u < 1)) return false;
-      xyz[k] = std::min(uint32_t(u * 65536.0), 65535u);
+      const double v = (double(p[k]) - double(t->origin()[k])) * (65536.0 / double(t->size()));
+      if (!(v >= 0 && v < 65536.0)) return false;
+      xyz[k] = uint32_t(v);
     }
     const Cell* c = leaf(xyz[0], xyz[1], xyz[2]);
     if (!c) return false;
@@ -255,9 +256,10 @@ struct CellMap {
     uint32_t xyz[3];
     double u[3];
     for (int k = 0; k < 3; ++k) {
-      u[k] = (double(p[k]) - t->origin()[k]) / t->size();
-      if (!(u[k] >= 0 && u[k] < 1)) return false;
-      xyz[k] = std::min(uint32_t(u[k] * 65536.0), 65535u);
+      const double v = (double(p[k]) - double(t->origin()[k])) * (65536.0 / double(t->size()));
+      if (!(v >= 0 && v < 65536.0)) return false;
+      xyz[k] = uint32_t(v);
+      u[k] = v / 65536.0;
     }
     int level = 0;
     if (!leaf(xyz[0], xyz[1], xyz[2], &level)) return false;

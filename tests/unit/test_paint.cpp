@@ -152,6 +152,42 @@ void expect_lookups_match(const OctreeTexture& t, const Mesh& m, std::mt19937& r
   }
   EXPECT_GT(found, pr.size() / 2);
   EXPECT_GT(compared_filtered, pr.size() / 2);
+  // With a top-level index (any level), in batches, and after compaction: the same answers.
+  std::vector<float> pts, nrm;
+  for (const Probe& q : pr) {
+    pts.insert(pts.end(), q.p, q.p + 3);
+    nrm.insert(nrm.end(), q.n, q.n + 3);
+  }
+  const OctreeIndex idx4(t, 4), idx6(t, 6);
+  OctreeTexture compacted = t;
+  compacted.compact();
+  ASSERT_EQ(compacted.check(), "");
+  EXPECT_LE(compacted.words().size(), t.words().size());
+  const OctreeIndex idxc(compacted, 5);
+  for (int variant = 0; variant < 3; ++variant) {
+    const OctreeTexture& tex = variant == 2 ? compacted : t;
+    OctreeSampler smp(tex, variant == 0 ? &idx4 : variant == 1 ? &idx6 : &idxc);
+    OctreeSampler batch(tex, variant == 1 ? &idx6 : nullptr);
+    std::vector<Rgba8> got(pr.size());
+    std::vector<uint8_t> got_found(pr.size());
+    std::vector<float> got_f(4 * pr.size());
+    batch.nearest_batch(pts.data(), nrm.data(), pr.size(), got.data(), got_found.data());
+    batch.filtered_batch(pts.data(), nrm.data(), pr.size(), 0.0f, got_f.data());
+    for (size_t i = 0; i < pr.size(); ++i) {
+      const float* n = pr[i].has_n ? pr[i].n : nullptr;
+      Rgba8 want, c;
+      const bool w = map.nearest(pr[i].p, n, want);
+      ASSERT_EQ(smp.nearest(pr[i].p, n, c), w) << variant;
+      ASSERT_EQ(c, want) << variant;
+      if (!pr[i].has_n) continue;  // the batch calls were given every normal
+      ASSERT_EQ(bool(got_found[i]), w) << variant;
+      ASSERT_EQ(got[i], want) << variant;
+      float rf[4];
+      if (map.filtered(pr[i].p, n, rf)) {
+        for (int k = 0; k < 4; ++k) ASSERT_NEAR(got_f[4 * i + size_t(k)], rf[k], 2e-4) << variant;
+      }
+    }
+  }
   // The same points in Morton order through one cached sampler.
   std::vector<std::pair<uint64_t, size_t>> order;
   for (size_t i = 0; i < pr.size(); ++i) {

@@ -3,10 +3,36 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "limn/paint/texture.hpp"
 
 namespace limn {
+
+/// A dense table over the cells of one level naming the deepest node (general node or brick)
+/// holding each, where a walk resumes: random lookups skip the top levels (the design note's
+/// "dense top-level index"). CPU only, not part of the texture or its file; rebuild it after the
+/// texture changes. 12 bytes per cell: level 5 = 384 KiB, level 6 = 3 MiB.
+class OctreeIndex {
+ public:
+  /// Builds the table at `level` (1-7). O(8^level + nodes above it).
+  explicit OctreeIndex(const OctreeTexture& t, int level = 6);
+  int level() const { return level_; }
+  size_t bytes() const { return entries_.size() * sizeof(Entry); }
+
+  struct Entry {
+    uint32_t ptr = 0, info = 0;  ///< a general node (ptr, info), or a brick word in ptr
+    int8_t level = 0;            ///< the node's level
+    uint8_t brick = 0;           ///< 1: ptr is a brick word
+  };
+  const Entry& at(uint32_t x, uint32_t y, uint32_t z) const {
+    return entries_[(size_t(z) << (2 * level_)) | (size_t(y) << level_) | x];
+  }
+
+ private:
+  std::vector<Entry> entries_;
+  int level_;
+};
 
 /// Lookups with a cache of the last node reached, so coherent points (neighbours, a Morton
 /// order, the 8 taps of a filtered lookup) resume there instead of walking from the root. One
@@ -14,7 +40,8 @@ namespace limn {
 /// a change).
 class OctreeSampler {
  public:
-  explicit OctreeSampler(const OctreeTexture& t) : t_(&t) {}
+  /// `index` (may be null): an OctreeIndex of the same texture, for random access.
+  explicit OctreeSampler(const OctreeTexture& t, const OctreeIndex* index = nullptr);
 
   /// Nearest: the colour of the leaf holding p, the sample facing n (n null: the front sample;
   /// n need not be unit). False, with `out` = background, when p is outside the cube, no leaf
@@ -32,7 +59,17 @@ class OctreeSampler {
   bool filtered(const float p[3], const float* n, float footprint, float rgba[4]);
 
   /// Forgets the cache.
-  void reset() { cache_level_ = -1; }
+  void reset() { cache_ = Cache{}; }
+
+  /// Many lookups at once, with the results of `nearest` / `filtered` for each point (p and n:
+  /// 3 floats per point; n may be null). Points go in groups of 16 whose walks first descend in
+  /// lockstep issuing prefetches for each level's nodes, so the memory latency of 16 random
+  /// walks overlaps instead of adding up; then each point is looked up as usual, from cache.
+  /// `found` (may be null) receives 1/0 per point. Same results as one call per point.
+  void nearest_batch(const float* p, const float* n, size_t count, Rgba8* out,
+                     uint8_t* found = nullptr);
+  void filtered_batch(const float* p, const float* n, size_t count, float footprint, float* rgba,
+                      uint8_t* found = nullptr);
 
   /// Integer-coordinate form of `nearest`: (x, y, z) at level kMaxDepth.
   bool nearest_at(uint32_t x, uint32_t y, uint32_t z, const float* n, Rgba8& out, int* level);
@@ -40,17 +77,27 @@ class OctreeSampler {
   /// above that level (its sample facing n), or the average of the node at that level.
   bool cell_value(uint32_t x, uint32_t y, uint32_t z, int level, const float* n, Rgba8& out);
 
+  /// A node a walk reached: a general node or a brick, its level and its cell there.
+  struct CacheSlot {
+    int level = -1;
+    bool brick = false;
+    uint32_t ptr = 0, info = 0, x = 0, y = 0, z = 0;
+  };
+  /// The last four nodes reached, most recent first: the 8 taps of a filtered lookup straddle
+  /// up to a few bricks, and one slot would thrash between them.
+  struct Cache {
+    CacheSlot slot[4];
+  };
+
  private:
-  bool brick_leaf(uint32_t word, int level, uint32_t x, uint32_t y, uint32_t z, const float* n,
-                  Rgba8& out, int* leaf_level) const;
+  void prefetch_group(const float* p, size_t count);
+  void prefetch_coords(const uint32_t* xyz, size_t count);
   bool trilinear(const double u[3], int level, const float* n, bool averages, float acc[5]);
 
   const OctreeTexture* t_;
-  // The last node reached: a general node (info != 0 or kind) or a brick, its level and the
-  // coordinates of its cell at that level.
-  int cache_level_ = -1;
-  bool cache_brick_ = false;
-  uint32_t cache_ptr_ = 0, cache_info_ = 0, cache_x_ = 0, cache_y_ = 0, cache_z_ = 0;
+  const OctreeIndex* index_;
+  double origin_[3], scale_;  ///< scale_: the cube's size
+  Cache cache_;
 };
 
 /// One nearest lookup without a cache (see OctreeSampler::nearest).

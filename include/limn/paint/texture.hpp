@@ -2,8 +2,10 @@
 // Jin's "indirection pool" of 2x2x2 grids (seed 002) and Lefebvre, Hornus and Neyret's octree
 // textures (GPU Gems 2, ch. 37), with 32-bit links, compact children and per-leaf sides.
 //
-// Texture space is the mesh's rest-pose bounding cube (`origin`, `size`): a point p maps to
-// u = (p - origin) / size in [0,1)^3. Level l splits the cube into 2^l cells per axis; the root
+// Texture space is the mesh's rest-pose bounding cube (`origin`, `size`): a point p falls in the
+// level-16 cell floor((p - origin) * (65536 / size)) (in double; `to_unit` gives the same scaled
+// to [0,1)^3), so the cell at level l is that >> (16 - l). Level l splits the cube into 2^l cells
+// per axis; the root
 // node covers level 0 and its cells are at level 1. A texture painted at depth D has leaves at
 // level D (2^D effective resolution), D <= kMaxDepth.
 //
@@ -24,8 +26,8 @@
 //     [B words]   brick words of the B brick children: bit 31 = the brick has a double mask,
 //                 bits 0-30 = the brick's block
 //     [1 word]    the node's average colour (mip level of this cell)
-//     [S words]   leaf samples (RGBA8), 1 per leaf cell, 2 for a double cell (front, back)
 //     [ceil(L/8)] leaf tags, a nibble per leaf cell (cell k in bits 4(k%8)..4(k%8)+3 of word k/8)
+//     [S words]   leaf samples (RGBA8), 1 per leaf cell, 2 for a double cell (front, back)
 // * A *brick* is a node whose cells are general nodes holding only leaves: two levels stored as
 //   one 4x4x4 block with a 64-bit mask in Morton order (bit 8 c1 + c2: c1 the cell at the brick's
 //   level + 1, c2 the cell inside it), so each byte of the mask is one 2x2x2 node's occupancy.
@@ -34,9 +36,10 @@
 //     [2 words]   occupancy mask M (low word holds bits 0-31)
 //     [2 words]   double mask (only when the brick word's bit 31 is set)
 //     [1 word]    the brick's average colour
-//     [S words]   samples, 1 per occupied cell, 2 for a double cell
 //     [ceil(N/8)] tags, a nibble per occupied cell
-//   A shader reads the mask (two words for two levels), then the sample.
+//     [S words]   samples, 1 per occupied cell, 2 for a double cell
+//   A shader reads the mask (two words for two levels), the tag, then the sample; tags come
+//   before samples so the three mostly share a cache line.
 //
 // Sample index of cell c within its node = popcount(leafs below c) + popcount(doubles below c).
 //
@@ -193,7 +196,8 @@ class OctreeTexture {
   /// Free blocks as (class, block) pairs, sorted; class = 2 * words, + 1 for a brick's block.
   std::vector<std::pair<uint32_t, uint32_t>> free_blocks() const;
 
-  /// Texture-space coordinates of a world point (u in [0,1)^3 inside the cube). O(1).
+  /// Texture-space coordinates of a world point: (p - origin) * (65536 / size) / 65536, in
+  /// [0,1)^3 inside the cube (the mapping every lookup uses). O(1).
   void to_unit(const float p[3], double u[3]) const;
   /// World centre of cell (x, y, z) at `level`. O(1).
   void cell_center(int level, uint32_t x, uint32_t y, uint32_t z, float out[3]) const;
@@ -208,10 +212,18 @@ class OctreeTexture {
     visit_samples(&f, [](void* ctx, const OctreeSample& s) { (*static_cast<F*>(ctx))(s); });
   }
 
-  /// Checks the structure: every block inside the pool, even, no two blocks sharing a word
-  /// (so no cycles), masks consistent, tags valid, free blocks disjoint from live ones and every
-  /// word accounted for. Returns an empty string when valid, else the first problem. O(pool).
+  /// Checks the structure: every block inside the pool (general blocks at even words), no two
+  /// blocks sharing a word (so no cycles), masks consistent, tags valid, free blocks disjoint
+  /// from live ones and every word accounted for. Returns an empty string when valid, else the
+  /// first problem. O(pool).
   std::string check() const;
+
+  /// Rewrites the pool in depth-first order (each node's block just before its children's,
+  /// bricks after their general siblings), dropping every free block: the smallest pool, and a
+  /// walk that stays within a few pages near the leaves. Lookups are unchanged; undo records of
+  /// this texture no longer apply (clear its PaintHistory). Throws std::logic_error while a
+  /// stroke is being recorded. O(pool).
+  void compact();
 
   /// True when the two textures hold the same pool, free lists, cube and background.
   bool operator==(const OctreeTexture& o) const;
