@@ -8,6 +8,7 @@
 #include <map>
 #include <sstream>
 
+#include "adaptive.hpp"
 #include "common.hpp"
 #include "limn/subdiv/depth.hpp"
 #include "limn/subdiv/patches.hpp"
@@ -18,131 +19,25 @@ namespace limn::cli {
 
 namespace {
 
-struct AdaptiveOpts {
-  int depth = -1, max_depth = 10, tess = 4;
-  float tolerance = -1, tess_px = 0;
-  std::string camera, resolution, errors = "auto";
-  bool depth_colors = false, dynamic = false;  // dynamic: --tolerance was given
-};
-
-// "ex,ey,ez,tx,ty,tz,fovy_deg" -> camera (image size set separately).
-Camera parse_camera(const std::string& s, Camera c) {
-  std::vector<float> v;
-  std::stringstream in(s);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    try {
-      size_t used = 0;
-      v.push_back(std::stof(item, &used));
-      if (used != item.size()) throw std::invalid_argument(item);
-    } catch (const std::exception&) {
-      throw InputError(fmt::format("--camera {}: '{}' is not a number", s, item));
-    }
-  }
-  if (v.size() != 7 || !(v[6] > 0 && v[6] < 180))
-    throw InputError(
-        fmt::format("--camera {}: expected ex,ey,ez,tx,ty,tz,fovy_deg (0 < fovy < 180)", s));
-  for (int k = 0; k < 3; ++k) c.eye[k] = v[size_t(k)], c.target[k] = v[size_t(k) + 3];
-  c.fovy_deg = v[6];
-  for (float x : v)
-    if (!std::isfinite(x)) throw InputError(fmt::format("--camera {}: not finite", s));
-  return c;
-}
-
-void parse_resolution(const std::string& s, int& w, int& h) {
-  const size_t x = s.find('x');
-  try {
-    if (x == std::string::npos) throw std::invalid_argument(s);
-    size_t a = 0, b = 0;
-    w = std::stoi(s.substr(0, x), &a);
-    h = std::stoi(s.substr(x + 1), &b);
-    if (a != x || b != s.size() - x - 1) throw std::invalid_argument(s);
-  } catch (const std::exception&) {
-    throw InputError(fmt::format("--resolution {}: expected WxH, such as 1280x720", s));
-  }
-  if (w < 1 || h < 1 || w > 32768 || h > 32768)
-    throw InputError(fmt::format("--resolution {}: 1-32768 pixels each way", s));
-}
-
 void run_adaptive(const std::string& mesh, const std::string& out_path, const std::string& format,
                   const AdaptiveOpts& a, bool json) {
   if (format_from_path(out_path) == MeshFormat::automatic)
     throw InputError(fmt::format("{}: cannot tell the output format from the extension", out_path));
-  const bool dynamic = a.dynamic;
-  if (dynamic && a.depth >= 0) throw InputError("--depth and --tolerance exclude each other");
-  if (a.errors != "auto" && a.errors != "measured" && a.errors != "estimated")
-    throw InputError(
-        fmt::format("--errors {}: expected 'auto', 'measured' or 'estimated'", a.errors));
-  if (dynamic && !(a.tolerance > 0 && std::isfinite(a.tolerance)))
-    throw InputError(
-        fmt::format("--tolerance {}: must be a positive number of pixels", a.tolerance));
-  const int depth = a.depth >= 0 ? a.depth : 3;
-  if (depth > 12) throw InputError(fmt::format("--depth {}: must be 0-12", depth));
-  if (a.max_depth < 0 || a.max_depth > 12)
-    throw InputError(fmt::format("--max-depth {}: must be 0-12", a.max_depth));
-  if (a.tess < 1 || a.tess > 64) throw InputError(fmt::format("--tess {}: must be 1-64", a.tess));
   int w = 1280, h = 720;
-  if (!a.resolution.empty()) parse_resolution(a.resolution, w, h);
-
+  check_adaptive(a, w, h);
   Stopwatch sw;
   const Mesh cage = read_mesh(mesh, parse_format_option(format, "--format"));
   nlohmann::json timings = {{"read", sw.lap()}};
-  const SubdivOptions options = subdiv_options(cage);
-  Camera cam = frame_camera(cage, w, h);
-  if (!a.camera.empty()) cam = parse_camera(a.camera, cam);
-  VertexErrorModel model = vertex_error_model(cage, options);
-  PatchOptions po;
-  po.subdiv = options;
-  po.depth = dynamic ? a.max_depth : depth;
-  std::vector<uint8_t> vdepth;
-  std::vector<float> estimate;
-  // Measured errors: every patch down to --max-depth once, its end caps' errors measured, and
-  // the view's patches selected from it (no second isolation).
-  // auto: measured up to kMeasuredFaces cage faces (the hierarchy is built whole, level by level,
-  // so its memory grows with the cage), estimated above.
-  constexpr size_t kMeasuredFaces = 32768;
-  const bool measured = dynamic && (a.errors == "measured" ||
-                                    (a.errors == "auto" && cage.face_count() <= kMeasuredFaces));
-  PatchHierarchy hierarchy;
-  if (measured) {
-    hierarchy = build_patch_hierarchy(cage, po);
-    timings["hierarchy"] = sw.lap();
-    measure_vertex_errors(cage, hierarchy, model);
-    timings["measure"] = sw.lap();
-  }
-  if (dynamic) {
-    DepthOptions d;
-    d.tolerance_px = a.tolerance;
-    d.max_depth = a.max_depth;
-    vdepth = select_depths(cage, model, cam, d, {}, {}, &estimate);
-  } else {
-    // The error the fixed depth leaves, as the same model estimates it for this camera.
-    DepthOptions d;
-    std::vector<uint8_t> pin(cage.vertex_count(), uint8_t(depth));
-    select_depths(cage, model, cam, d, {}, pin, &estimate);
-  }
-  timings["select"] = sw.lap();
-  PatchStats ps;
-  PatchTable table;
-  if (measured) {
-    table = select_patches(hierarchy, vdepth);
-    timings["select_patches"] = sw.lap();
-    for (const auto* params : {&table.regular_params, &table.gregory_params})
-      for (const PatchParam& p : *params) {
-        if (ps.regular_by_level.size() <= p.level) {
-          ps.regular_by_level.resize(p.level + 1u, 0);
-          ps.gregory_by_level.resize(p.level + 1u, 0);
-        }
-        ++(p.type == PatchType::gregory ? ps.gregory_by_level : ps.regular_by_level)[p.level];
-      }
-  } else {
-    table = build_patches(cage, po, vdepth, &ps);
-    timings["isolate"] = ps.refine_ms;
-    timings["patches"] = ps.patches_ms;
-    sw.lap();
-  }
-  const std::vector<float> points = (measured ? hierarchy.table : table).points(cage.positions);
-  timings["points"] = sw.lap();
+  const AdaptiveSurface surf = build_adaptive(cage, a, w, h, sw, timings);
+  const bool dynamic = a.dynamic, measured = surf.measured;
+  const int depth = surf.depth;
+  const Camera& cam = surf.cam;
+  const PatchTable& table = surf.table;
+  const PatchStats& ps = surf.stats;
+  const std::vector<float>& points = surf.points;
+  const VertexErrorModel& model = surf.model;
+  const std::vector<uint8_t>& vdepth = surf.vdepth;
+  const std::vector<float>& estimate = surf.estimate;
   TessellateOptions to;
   to.factor = a.tess;
   if (a.tess_px > 0) to.camera = &cam, to.pixels_per_segment = a.tess_px;

@@ -19,6 +19,7 @@ void add_subdivide(CLI::App& app);
 void add_simplify(CLI::App& app);
 void add_paint(CLI::App& app);
 void add_bake(CLI::App& app);
+void add_render(CLI::App& app);
 
 /// Milliseconds since construction.
 class Stopwatch {

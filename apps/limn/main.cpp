@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   limn::cli::add_simplify(app);
   limn::cli::add_paint(app);
   limn::cli::add_bake(app);
+  limn::cli::add_render(app);
   limn::cli::add_demo(app);
   try {
     app.parse(argc, argv);

@@ -1,0 +1,148 @@
+// limn render: a PNG of a mesh, or of its adaptive limit surface drawn with tessellation shaders,
+// rendered headless (EGL; Mesa's llvmpipe without a GPU).
+#include <fmt/format.h>
+
+#include <cmath>
+#include <sstream>
+
+#include "adaptive.hpp"
+#include "common.hpp"
+#include "limn/render/draw.hpp"
+#include "limn/render/gl_context.hpp"
+#include "limn/render/image.hpp"
+
+namespace limn::cli {
+
+void add_render(CLI::App& app) {
+  auto* cmd = app.add_subcommand("render", "Render a mesh or its adaptive limit surface to PNG");
+  struct Opts {
+    std::string mesh, out, format, background = "1,1,1";
+    bool adaptive = false, wireframe = false, json = false;
+    int samples = 4;
+    AdaptiveOpts a;
+  };
+  auto o = std::make_shared<Opts>();
+  cmd->add_option("MESH", o->mesh, "Mesh or control cage (OBJ with OpenSubdiv tags, PLY, OFF)")
+      ->required();
+  cmd->add_option("-o,--output", o->out, "Output image (.png)")->required();
+  cmd->add_flag("--adaptive", o->adaptive,
+                "Draw the feature-adaptive limit surface (patches on the GPU), not the mesh");
+  cmd->add_option("--depth", o->a.depth,
+                  "--adaptive: isolation depth of every irregular vertex (0-12; default 3)");
+  cmd->add_option("--tolerance", o->a.tolerance,
+                  "--adaptive: screen error in pixels; picks a depth per vertex from the camera");
+  cmd->add_option("--max-depth", o->a.max_depth, "--adaptive --tolerance: deepest level (0-12)");
+  cmd->add_option("--errors", o->a.errors,
+                  "--adaptive --tolerance: 'measured', 'estimated' or 'auto' (as subdivide)");
+  cmd->add_option("--camera", o->a.camera,
+                  "ex,ey,ez,tx,ty,tz,fovy_deg (default: frames the model from the front)");
+  cmd->add_option("--resolution", o->a.resolution, "Image size WxH (default 1280x720)");
+  cmd->add_option("--tess", o->a.tess,
+                  "--adaptive: segments per patch edge (1-32); default: screen-space rates");
+  cmd->add_option("--tess-px", o->a.tess_px,
+                  "--adaptive: about one segment per PX pixels of cage edge (default 8)");
+  cmd->add_flag("--wireframe", o->wireframe, "Outline the patches (or the mesh's polygons)");
+  cmd->add_flag("--depth-colors", o->a.depth_colors,
+                "--adaptive: colour each patch by its refinement level");
+  cmd->add_option("--samples", o->samples, "Multisampling (1-16, default 4)");
+  cmd->add_option("--background", o->background, "Background colour r,g,b (0-1, default white)");
+  cmd->add_option("--format", o->format, "Input format, overriding the extension");
+  cmd->add_flag("--json", o->json, "Print one JSON object with counts and timings");
+  cmd->callback([o, cmd] {
+    if (std::filesystem::path(o->out).extension() != ".png")
+      throw InputError(fmt::format("{}: the output must be a .png file", o->out));
+    if (!o->adaptive)
+      for (const char* a : {"--depth", "--tolerance", "--max-depth", "--errors", "--tess",
+                            "--tess-px", "--depth-colors"})
+        if (cmd->count(a)) throw InputError(fmt::format("{} goes with --adaptive", a));
+    if (o->samples < 1 || o->samples > 16)
+      throw InputError(fmt::format("--samples {}: must be 1-16", o->samples));
+    o->a.dynamic = cmd->count("--tolerance") > 0;
+    const bool fixed_tess = cmd->count("--tess") > 0;
+    if (fixed_tess && cmd->count("--tess-px"))
+      throw InputError("--tess and --tess-px exclude each other");
+    if (fixed_tess && (o->a.tess < 1 || o->a.tess > 32))
+      throw InputError(fmt::format("--tess {}: must be 1-32 on the GPU", o->a.tess));
+    const float pps = cmd->count("--tess-px") ? o->a.tess_px : 8.0f;
+    if (!(pps > 0 && std::isfinite(pps)))
+      throw InputError(fmt::format("--tess-px {}: must be a positive number of pixels", pps));
+    float bg[4] = {1, 1, 1, 1};
+    {
+      std::stringstream in(o->background);
+      std::string item;
+      int k = 0;
+      for (; std::getline(in, item, ','); ++k) {
+        size_t used = 0;
+        float x = -1;
+        try {
+          x = std::stof(item, &used);
+        } catch (const std::exception&) {
+        }
+        if (k > 2 || used != item.size() || !(x >= 0 && x <= 1))
+          throw InputError(fmt::format("--background {}: three numbers 0-1", o->background));
+        bg[k] = x;
+      }
+      if (k != 3)
+        throw InputError(fmt::format("--background {}: three numbers 0-1", o->background));
+    }
+    int w = 1280, h = 720;
+    check_adaptive(o->a, w, h);
+
+    Stopwatch sw;
+    const Mesh mesh = read_mesh(o->mesh, parse_format_option(o->format, "--format"));
+    nlohmann::json timings = {{"read", sw.lap()}};
+    GlContext gl;
+    timings["context"] = sw.lap();
+    RenderTarget target(w, h, o->samples);
+    DrawOptions d;
+    d.outline = o->wireframe;
+    d.depth_colors = o->a.depth_colors;
+    d.pixels_per_segment = pps;
+    d.factor = fixed_tess ? o->a.tess : 0;
+    DrawStats st;
+    nlohmann::json patches = nullptr;
+    Camera cam;
+    if (o->adaptive) {
+      const AdaptiveSurface surf = build_adaptive(mesh, o->a, w, h, sw, timings);
+      cam = surf.cam;
+      PatchDrawer drawer(mesh, surf.table, surf.points);
+      timings["upload"] = sw.lap();
+      target.begin(bg);
+      st = drawer.draw(cam, d);
+      patches = {{"regular", surf.table.regular_params.size()},
+                 {"gregory", surf.table.gregory_params.size()}};
+    } else {
+      cam = frame_camera(mesh, w, h);
+      if (!o->a.camera.empty()) cam = parse_camera(o->a.camera, cam);
+      MeshDrawer drawer(mesh);
+      timings["upload"] = sw.lap();
+      target.begin(bg);
+      st = drawer.draw(cam, d);
+    }
+    timings["draw"] = sw.lap();
+    write_png(o->out, w, h, target.read_rgba());
+    timings["write"] = sw.lap();
+    if (o->json) {
+      nlohmann::json j = {{"input", o->mesh},
+                          {"output", o->out},
+                          {"renderer", gl.renderer()},
+                          {"resolution", {w, h}},
+                          {"camera",
+                           {{"eye", {cam.eye[0], cam.eye[1], cam.eye[2]}},
+                            {"target", {cam.target[0], cam.target[1], cam.target[2]}},
+                            {"fovy_deg", cam.fovy_deg}}},
+                          {"drawn", st.patches},
+                          {"patches", patches},
+                          {"triangles", st.triangles},
+                          {"gpu_ms", st.gpu_ms},
+                          {"cpu_draw_ms", st.cpu_ms},
+                          {"timings_ms", timings}};
+      fmt::print("{}\n", j.dump(2));
+    } else {
+      fmt::print("{} -> {}: {} {} drawn, {} triangles, {}x{} ({:.1f} ms)\n", o->mesh, o->out,
+                 st.patches, o->adaptive ? "patches" : "polygons", st.triangles, w, h, sw.ms());
+    }
+  });
+}
+
+}  // namespace limn::cli

@@ -1,0 +1,554 @@
+// The GPU side of the patch table: tessellation shaders evaluating limn's patches.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "gl_util.hpp"
+#include "limn/mesh/topology.hpp"
+#include "limn/render/draw.hpp"
+#include "limn/subdiv/tessellate.hpp"
+
+namespace limn {
+
+namespace {
+
+// Per-patch data, std430: the cage line of each patch edge (a cage edge, or past the cage edges
+// a cage face for edges inside one), level | boundary << 8 | transition << 12 | type << 16 |
+// crease edge << 18, and the crease's sharpness.
+struct PatchInfo {
+  uint32_t keys[4];
+  uint32_t bits;
+  float sharpness;
+  uint32_t pad[2];
+};
+static_assert(sizeof(PatchInfo) == 32);
+
+constexpr const char* kVertex = R"(
+layout(std430, binding = 0) readonly buffer Points { float pts[]; };
+layout(std430, binding = 1) readonly buffer Cvs { uint cvs[]; };
+uniform uint patch_base;
+out vec3 v_pos;
+flat out uint v_patch;
+void main() {
+  // The patch comes from the vertex index: gl_PrimitiveID restarts every 1024 patch vertices on
+  // llvmpipe.
+  uint i = uint(gl_VertexID);
+  uint p = cvs[i];
+  v_pos = vec3(pts[3u * p], pts[3u * p + 1u], pts[3u * p + 2u]);
+  v_patch = patch_base + i / uint(CVS);
+}
+)";
+
+constexpr const char* kInfo = R"(
+struct Info { uvec4 keys; uint bits; float sharpness; uint pad0, pad1; };
+layout(std430, binding = 2) readonly buffer Infos { Info info[]; };
+)";
+
+constexpr const char* kControl = R"(
+layout(vertices = CVS) out;
+in vec3 v_pos[];
+flat in uint v_patch[];
+out vec3 c_pos[];
+// The patch travels with every control point: llvmpipe mixes up per-patch outputs ("patch out")
+// between patches in large draws, as it does gl_PrimitiveID.
+flat out uint c_patch[];
+layout(std430, binding = 3) readonly buffer Lines { float line_rate[]; };
+uniform int factor;
+// Segments of a patch edge of refinement level k on a line of `r` segments at level 0: a power
+// of two, so that an edge at level k is exactly twice the two edges at level k + 1 beside it.
+float rate(float r, float k) {
+  float m = round(log2(max(r, 1.0)));
+  return clamp(exp2(m - k), 1.0, 32.0);
+}
+void main() {
+  c_pos[gl_InvocationID] = v_pos[gl_InvocationID];
+  c_patch[gl_InvocationID] = v_patch[gl_InvocationID];
+  if (gl_InvocationID == 0) {
+    uint p = v_patch[0];
+    Info I = info[p];
+    float k = float(I.bits & 0xFFu);
+    uint transition = (I.bits >> 12) & 0xFu;
+    float e[4];
+    for (int j = 0; j < 4; ++j) {
+      bool split = ((transition >> uint(j)) & 1u) != 0u;
+      // An edge bordering finer patches takes the sum of their two rates.
+      float f = factor > 0 ? float(factor) : rate(line_rate[I.keys[j]], split ? k + 1.0 : k);
+      e[j] = split ? 2.0 * f : f;
+    }
+    // Patch edge j: 0 is v = 0, 1 is u = 1, 2 is v = 1, 3 is u = 0; GL's outer levels run
+    // u = 0, v = 0, u = 1, v = 1.
+    gl_TessLevelOuter[0] = e[3];
+    gl_TessLevelOuter[1] = e[0];
+    gl_TessLevelOuter[2] = e[1];
+    gl_TessLevelOuter[3] = e[2];
+    gl_TessLevelInner[0] = max(e[0], e[2]);
+    gl_TessLevelInner[1] = max(e[1], e[3]);
+  }
+}
+)";
+
+constexpr const char* kEvalCommon = R"(
+layout(quads, equal_spacing, ccw) in;
+in vec3 c_pos[];
+flat in uint c_patch[];
+uniform mat4 view_proj;
+out vec3 t_pos;
+out vec3 t_nrm;
+out vec2 t_uv;
+flat out uint t_patch;
+void emit_point(vec3 p, vec3 pu, vec3 pv) {
+  vec3 n = cross(pu, pv);
+  if (dot(n, n) < 1e-30) n = cross(c_pos[CVS - 1] - c_pos[0], c_pos[CVS / 2] - c_pos[CVS / 4]);
+  t_pos = p;
+  t_nrm = n;
+  t_uv = gl_TessCoord.xy;
+  t_patch = c_patch[0];
+  gl_Position = view_proj * vec4(p, 1.0);
+}
+)";
+
+// The same bases as limn's CPU evaluator (src/subdiv/patch_eval.cpp).
+constexpr const char* kEvalRegular = R"(
+void bspline(float t, out vec4 w, out vec4 d) {
+  float s = 1.0 - t, t2 = t * t, t3 = t2 * t;
+  w = vec4(s * s * s, 3.0 * t3 - 6.0 * t2 + 4.0, -3.0 * t3 + 3.0 * t2 + 3.0 * t + 1.0, t3) / 6.0;
+  d = vec4(-0.5 * s * s, 1.5 * t2 - 2.0 * t, -1.5 * t2 + t + 0.5, 0.5 * t2);
+}
+// An extrapolated end point (2 next - next but one) folded into the other weights.
+vec4 fold(vec4 w, bool lo, bool hi) {
+  if (lo) { w.y += 2.0 * w.x; w.z -= w.x; w.x = 0.0; }
+  if (hi) { w.z += 2.0 * w.w; w.y -= w.w; w.w = 0.0; }
+  return w;
+}
+// The limit basis of a cubic curve whose point 1 is a semi-sharp vertex of sharpness s.
+void crease_basis(float t, float s, out vec4 w, out vec4 d) {
+  mat4 A = mat4(1.0);  // rows: the current segment's points over the original four
+  float scale = 1.0;
+  for (int guard = 0; guard < 16 && s > 0.0; ++guard) {
+    float a = min(s, 1.0);
+    vec4 v1 = vec4((1.0 - a) / 8.0, a + (1.0 - a) * 0.75, (1.0 - a) / 8.0, 0.0);
+    vec4 e01 = vec4(0.5, 0.5, 0.0, 0.0), e12 = vec4(0.0, 0.5, 0.5, 0.0);
+    vec4 e23 = vec4(0.0, 0.0, 0.5, 0.5), v2 = vec4(0.0, 0.125, 0.75, 0.125);
+    mat4 M;  // GLSL matrices are column-major: build with rows transposed
+    if (t < 0.5) {
+      M = transpose(mat4(e01, v1, e12, v2));
+      t *= 2.0; scale *= 2.0; s -= 1.0;
+    } else {
+      M = transpose(mat4(v1, e12, v2, e23));
+      t = 2.0 * t - 1.0; scale *= 2.0; s = 0.0;
+    }
+    A = M * A;
+  }
+  vec4 b, db;
+  bspline(t, b, db);
+  w = b * A;            // w_j = sum_i b_i A[i][j]
+  d = (db * A) * scale;
+}
+void main() {
+  float s = gl_TessCoord.x, t = gl_TessCoord.y;
+  Info I = info[c_patch[0]];
+  uint boundary = (I.bits >> 8) & 0xFu;
+  vec4 wu, du, wv, dv;
+  bspline(s, wu, du);
+  bspline(t, wv, dv);
+  wu = fold(wu, (boundary & 8u) != 0u, (boundary & 2u) != 0u);
+  du = fold(du, (boundary & 8u) != 0u, (boundary & 2u) != 0u);
+  wv = fold(wv, (boundary & 1u) != 0u, (boundary & 4u) != 0u);
+  dv = fold(dv, (boundary & 1u) != 0u, (boundary & 4u) != 0u);
+  if (((I.bits >> 16) & 3u) == 2u) {  // single crease along edge ce, at the basis' t = 0
+    uint ce = (I.bits >> 18) & 3u;
+    float x = ce == 0u ? t : ce == 2u ? 1.0 - t : ce == 3u ? s : 1.0 - s;
+    vec4 cw, cd;
+    crease_basis(x, I.sharpness, cw, cd);
+    if (ce == 1u || ce == 2u) { cw = cw.wzyx; cd = -cd.wzyx; }
+    if (ce == 0u || ce == 2u) { wv = cw; dv = cd; } else { wu = cw; du = cd; }
+  }
+  vec3 p = vec3(0.0), pu = vec3(0.0), pv = vec3(0.0);
+  for (int y = 0; y < 4; ++y) {
+    vec3 rp = vec3(0.0), ru = vec3(0.0);
+    for (int x = 0; x < 4; ++x) {
+      vec3 c = c_pos[4 * y + x];
+      rp += wu[x] * c;
+      ru += du[x] * c;
+    }
+    p += wv[y] * rp;
+    pu += wv[y] * ru;
+    pv += dv[y] * rp;
+  }
+  emit_point(p, pu, pv);
+}
+)";
+
+constexpr const char* kEvalGregory = R"(
+void bezier(float t, out vec4 w, out vec4 d) {
+  float s = 1.0 - t;
+  w = vec4(s * s * s, 3.0 * t * s * s, 3.0 * t * t * s, t * t * t);
+  d = vec4(-3.0 * s * s, 3.0 * s * s - 6.0 * t * s, 6.0 * t * s - 3.0 * t * t, 3.0 * t * t);
+}
+const ivec3 kSlot[12] = ivec3[12](ivec3(0, 0, 0), ivec3(1, 0, 1), ivec3(2, 0, 7), ivec3(3, 0, 5),
+                                   ivec3(0, 1, 2), ivec3(3, 1, 6), ivec3(0, 2, 16), ivec3(3, 2, 12),
+                                   ivec3(0, 3, 15), ivec3(1, 3, 17), ivec3(2, 3, 11),
+                                   ivec3(3, 3, 10));
+void main() {
+  float s = gl_TessCoord.x, t = gl_TessCoord.y;
+  vec4 wu, du, wv, dv;
+  bezier(s, wu, du);
+  bezier(t, wv, dv);
+  vec3 p = vec3(0.0), pu = vec3(0.0), pv = vec3(0.0);
+  for (int i = 0; i < 12; ++i) {
+    ivec3 b = kSlot[i];
+    vec3 c = c_pos[b.z];
+    p += wu[b.x] * wv[b.y] * c;
+    pu += du[b.x] * wv[b.y] * c;
+    pv += wu[b.x] * dv[b.y] * c;
+  }
+  // Interior point of corner i: (a Fp + (D - a) Fm) / D with a and D linear in (s, t).
+  float a[4] = float[4](s, t, 1.0 - s, 1.0 - t);
+  vec2 ad[4] = vec2[4](vec2(1, 0), vec2(0, 1), vec2(-1, 0), vec2(0, -1));
+  float D[4] = float[4](s + t, t + 1.0 - s, 2.0 - s - t, 1.0 - t + s);
+  vec2 Dd[4] = vec2[4](vec2(1, 1), vec2(-1, 1), vec2(-1, -1), vec2(1, -1));
+  ivec3 slot[4] = ivec3[4](ivec3(1, 1, 3), ivec3(2, 1, 8), ivec3(2, 2, 13), ivec3(1, 2, 18));
+  for (int i = 0; i < 4; ++i) {
+    float g = 0.5;
+    vec2 gd = vec2(0.0);
+    if (D[i] > 0.0) {
+      g = a[i] / D[i];
+      gd = (ad[i] * D[i] - a[i] * Dd[i]) / (D[i] * D[i]);
+    }
+    ivec3 b = slot[i];
+    float w = wu[b.x] * wv[b.y], w_u = du[b.x] * wv[b.y], w_v = wu[b.x] * dv[b.y];
+    vec3 fp = c_pos[b.z], fm = c_pos[b.z + 1];
+    vec3 f = g * fp + (1.0 - g) * fm, fdiff = fp - fm;
+    p += w * f;
+    pu += w_u * f + w * gd.x * fdiff;
+    pv += w_v * f + w * gd.y * fdiff;
+  }
+  emit_point(p, pu, pv);
+}
+)";
+
+constexpr const char* kFragment = R"(
+in vec3 t_pos;
+in vec3 t_nrm;
+in vec2 t_uv;
+flat in uint t_patch;
+uniform vec3 eye;
+uniform vec3 base;
+uniform bool outline;
+uniform bool depth_colors;
+uniform vec3 ramp[17];
+out vec4 frag;
+void main() {
+  vec3 c = base;
+  if (depth_colors) c = ramp[min(info[t_patch].bits & 0xFFu, 16u)];
+  float edge = 1e9;
+  if (outline) {
+    vec2 d = min(t_uv, 1.0 - t_uv) / max(fwidth(t_uv), vec2(1e-9));
+    edge = min(d.x, d.y);
+  }
+  frag = vec4(shade(c, t_pos, t_nrm, eye, edge, outline), 1.0);
+}
+)";
+
+std::string with_header(int cvs, const char* a, const char* b = "", const char* c = "") {
+  return fmt::format("#version 450 core\n#define CVS {}\n{}{}{}", cvs, a, b, c);
+}
+
+// The level-0 rate of every cage line for this view: segments per cage edge (its projected
+// length over `pixels_per_segment`), then per cage face the largest of its edges'.
+void line_rates(const Mesh& cage, const Topology& topo, const Camera& camera, float pps,
+                std::vector<float>& out) {
+  const size_t ne = topo.edge_count(), nf = cage.face_count();
+  out.assign(ne + nf, 0.0f);
+  for (size_t e = 0; e < ne; ++e) {
+    const float* a = &cage.positions[3 * size_t(topo.edge_vertices[2 * e])];
+    const float* b = &cage.positions[3 * size_t(topo.edge_vertices[2 * e + 1])];
+    double ax, ay, bx, by;
+    if (!camera.project(a, ax, ay) || !camera.project(b, bx, by)) {
+      out[e] = 1e6f;  // reaches behind the eye: as fine as it goes
+      continue;
+    }
+    out[e] = float(std::hypot(ax - bx, ay - by) / double(pps));
+  }
+  for (size_t f = 0; f < nf; ++f) {
+    float m = 0;
+    for (uint32_t c = cage.face_offsets[f]; c < cage.face_offsets[f + 1]; ++c)
+      m = std::max(m, out[topo.corner_edge[c]]);
+    out[ne + f] = m;
+  }
+}
+
+// The tessellation stages alone, their position, (s, t) and patch captured by transform
+// feedback (interleaved: 3 + 2 floats, then the patch as a float-bit uint).
+gl::Program capture_program(std::string_view name, const std::string& vs, const std::string& tc,
+                            const std::string& te) {
+  gl::Program p(glCreateProgram());
+  for (const auto& [type, source] :
+       {std::pair{GLenum(GL_VERTEX_SHADER), &vs}, std::pair{GLenum(GL_TESS_CONTROL_SHADER), &tc},
+        std::pair{GLenum(GL_TESS_EVALUATION_SHADER), &te}}) {
+    const GLuint sh = glCreateShader(type);
+    const char* text = source->c_str();
+    glShaderSource(sh, 1, &text, nullptr);
+    glCompileShader(sh);
+    glAttachShader(p.get(), sh);
+    glDeleteShader(sh);
+  }
+  const char* varyings[] = {"t_pos", "t_uv", "t_patch"};
+  glTransformFeedbackVaryings(p.get(), 3, varyings, GL_INTERLEAVED_ATTRIBS);
+  glLinkProgram(p.get());
+  GLint ok = 0;
+  glGetProgramiv(p.get(), GL_LINK_STATUS, &ok);
+  if (!ok) throw std::runtime_error(fmt::format("OpenGL: program {} does not link", name));
+  return p;
+}
+
+}  // namespace
+
+struct PatchDrawer::Impl {
+  const Mesh* cage = nullptr;
+  Topology topo;
+  size_t regular = 0, gregory = 0, point_floats = 0;
+  uint32_t max_index = 0;
+  gl::Program regular_program, gregory_program;
+  gl::Program regular_capture, gregory_capture;  // transform feedback, no rasterisation
+  gl::Buffer points, regular_cvs, gregory_cvs, infos, lines;
+  size_t points_cap = 0, lines_cap = 0;
+  gl::VertexArray vao;
+  gl::Query time_query, primitives_query;
+  gl::Framebuffer capture_fbo;
+  gl::Renderbuffer capture_rb;
+  std::vector<float> rates;
+  Box bounds;
+  // Patches per draw call. llvmpipe (Mesa 22.3) mixes up the tessellation of patches whose
+  // levels differ once a draw holds more than about 60 patches (every patch still evaluated, but
+  // with another patch's data): draws of 32 patches stay clear of it; real GPUs draw all at once.
+  size_t chunk = SIZE_MAX;
+};
+
+PatchDrawer::PatchDrawer(const Mesh& cage, const PatchTable& table, std::span<const float> points)
+    : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  m.cage = &cage;
+  m.topo = build_topology(cage);
+  if (table.ptex_of_face.size() != cage.face_count() + 1)
+    throw InputError("render: the patch table was built from another cage");
+  m.regular = table.regular_params.size();
+  m.gregory = table.gregory_params.size();
+  std::vector<PatchInfo> infos;
+  infos.reserve(m.regular + m.gregory);
+  const uint32_t ne = uint32_t(m.topo.edge_count());
+  for (const auto* params : {&table.regular_params, &table.gregory_params})
+    for (const PatchParam& pp : *params) {
+      PatchInfo in{};
+      const uint32_t f = pp.base_face, b = cage.face_offsets[f], n = cage.face_size(f);
+      const uint32_t last = (1u << pp.depth) - 1;
+      for (int e = 0; e < 4; ++e) in.keys[e] = ne + f;  // inside the cage face
+      auto edge_of = [&](uint32_t corner) { return m.topo.corner_edge[b + corner % n]; };
+      if (n == 4) {
+        if (pp.v == 0) in.keys[0] = edge_of(0);
+        if (pp.u == last) in.keys[1] = edge_of(1);
+        if (pp.v == last) in.keys[2] = edge_of(2);
+        if (pp.u == 0) in.keys[3] = edge_of(3);
+      } else {  // corner c's quad: edge 0 on cage edge (c, c+1), edge 3 on (c-1, c)
+        if (pp.v == 0) in.keys[0] = edge_of(pp.corner);
+        if (pp.u == 0) in.keys[3] = edge_of(pp.corner + n - 1);
+      }
+      in.bits = uint32_t(pp.level) | uint32_t(pp.boundary & 0xF) << 8 |
+                uint32_t(pp.transition & 0xF) << 12 | uint32_t(pp.type) << 16 |
+                uint32_t(pp.crease_edge & 3) << 18;
+      in.sharpness = pp.sharpness;
+      infos.push_back(in);
+    }
+  for (const uint32_t p : table.regular_points) m.max_index = std::max(m.max_index, p);
+  for (const uint32_t p : table.gregory_points) m.max_index = std::max(m.max_index, p);
+  m.regular_cvs = gl::buffer(table.regular_points.data(), table.regular_points.size() * 4);
+  m.gregory_cvs = gl::buffer(table.gregory_points.data(), table.gregory_points.size() * 4);
+  m.infos = gl::buffer(infos.data(), infos.size() * sizeof(PatchInfo));
+  const std::string vs16 = with_header(16, kVertex), vs20 = with_header(20, kVertex);
+  const std::string tc16 = with_header(16, kInfo, kControl),
+                    tc20 = with_header(20, kInfo, kControl);
+  const std::string te16 = with_header(16, kInfo, kEvalCommon, kEvalRegular);
+  const std::string te20 = with_header(20, kInfo, kEvalCommon, kEvalGregory);
+  const std::string fs = with_header(16, kInfo, gl::kShadeGlsl, kFragment);
+  m.regular_program = gl::program("regular patches", {{GL_VERTEX_SHADER, vs16},
+                                                      {GL_TESS_CONTROL_SHADER, tc16},
+                                                      {GL_TESS_EVALUATION_SHADER, te16},
+                                                      {GL_FRAGMENT_SHADER, fs}});
+  m.gregory_program = gl::program("end caps", {{GL_VERTEX_SHADER, vs20},
+                                               {GL_TESS_CONTROL_SHADER, tc20},
+                                               {GL_TESS_EVALUATION_SHADER, te20},
+                                               {GL_FRAGMENT_SHADER, fs}});
+  m.regular_capture = capture_program("regular patches (capture)", vs16, tc16, te16);
+  m.gregory_capture = capture_program("end caps (capture)", vs20, tc20, te20);
+  GLuint n = 0;
+  glCreateVertexArrays(1, &n);
+  m.vao = gl::VertexArray(n);
+  glCreateQueries(GL_TIME_ELAPSED, 1, &n);
+  m.time_query = gl::Query(n);
+  glCreateQueries(GL_PRIMITIVES_GENERATED, 1, &n);
+  m.primitives_query = gl::Query(n);
+  if (std::string(reinterpret_cast<const char*>(glGetString(GL_RENDERER))).find("llvmpipe") !=
+      std::string::npos)
+    m.chunk = 32;
+  set_points(points);
+  gl::check("PatchDrawer");
+}
+
+PatchDrawer::~PatchDrawer() = default;
+
+void PatchDrawer::set_points(std::span<const float> points) {
+  Impl& m = *impl_;
+  if (points.size() % 3 || (m.regular + m.gregory && points.size() / 3 <= m.max_index))
+    throw InputError(fmt::format("render: {} point coordinates for patches reading point {}",
+                                 points.size(), m.max_index));
+  gl::upload(m.points, m.points_cap, points.data(), points.size() * sizeof(float));
+  m.point_floats = points.size();
+  m.bounds = Box{};  // near and far planes come from the points' bounds
+  for (size_t i = 0; i + 2 < points.size(); i += 3)
+    for (int k = 0; k < 3; ++k)
+      m.bounds.min[k] = std::min(m.bounds.min[k], points[i + size_t(k)]),
+      m.bounds.max[k] = std::max(m.bounds.max[k], points[i + size_t(k)]);
+}
+
+DrawStats PatchDrawer::draw(const Camera& camera, const DrawOptions& o) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Impl& m = *impl_;
+  DrawStats st;
+  st.patches = m.regular + m.gregory;
+  if (o.factor < 0 || o.factor > 32)
+    throw InputError(fmt::format("render: tessellation factor {} out of range (1-32)", o.factor));
+  if (!(o.pixels_per_segment > 0)) throw InputError("render: pixels per segment must be positive");
+  line_rates(*m.cage, m.topo, camera, o.pixels_per_segment, m.rates);
+  gl::upload(m.lines, m.lines_cap, m.rates.data(), m.rates.size() * sizeof(float));
+  const std::array<float, 16> vp = gl::view_projection(camera, m.bounds);
+  float ramp[17 * 3];
+  for (int k = 0; k < 17; ++k) depth_color(k, ramp + 3 * k);
+
+  glEnable(GL_DEPTH_TEST);
+  glDisable(GL_CULL_FACE);
+  glBindVertexArray(m.vao.get());
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, m.points.get());
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, m.infos.get());
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, m.lines.get());
+  glBeginQuery(GL_TIME_ELAPSED, m.time_query.get());
+  glBeginQuery(GL_PRIMITIVES_GENERATED, m.primitives_query.get());
+  for (int pass = 0; pass < 2; ++pass) {
+    const size_t count = pass ? m.gregory : m.regular;
+    if (!count) continue;
+    const GLuint prog = (pass ? m.gregory_program : m.regular_program).get();
+    const int cvs = pass ? 20 : 16;
+    glUseProgram(prog);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, (pass ? m.gregory_cvs : m.regular_cvs).get());
+    glUniform1ui(glGetUniformLocation(prog, "patch_base"), pass ? GLuint(m.regular) : 0u);
+    glUniform1i(glGetUniformLocation(prog, "factor"), o.factor);
+    glUniformMatrix4fv(glGetUniformLocation(prog, "view_proj"), 1, GL_FALSE, vp.data());
+    glUniform3fv(glGetUniformLocation(prog, "eye"), 1, camera.eye);
+    glUniform3fv(glGetUniformLocation(prog, "base"), 1, o.color);
+    glUniform1i(glGetUniformLocation(prog, "outline"), o.outline);
+    glUniform1i(glGetUniformLocation(prog, "depth_colors"), o.depth_colors);
+    glUniform3fv(glGetUniformLocation(prog, "ramp"), 17, ramp);
+    glPatchParameteri(GL_PATCH_VERTICES, cvs);
+    for (size_t first = 0; first < count; first += m.chunk)
+      glDrawArrays(GL_PATCHES, GLint(first * size_t(cvs)),
+                   GLsizei(std::min(m.chunk, count - first) * size_t(cvs)));
+  }
+  glEndQuery(GL_PRIMITIVES_GENERATED);
+  glEndQuery(GL_TIME_ELAPSED);
+  GLuint64 ns = 0, prims = 0;
+  glGetQueryObjectui64v(m.time_query.get(), GL_QUERY_RESULT, &ns);
+  glGetQueryObjectui64v(m.primitives_query.get(), GL_QUERY_RESULT, &prims);
+  glBindVertexArray(0);
+  glUseProgram(0);
+  gl::check("PatchDrawer::draw");
+  st.gpu_ms = double(ns) * 1e-6;
+  st.triangles = prims;
+  st.cpu_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return st;
+}
+
+PatchDrawer::Capture PatchDrawer::capture(const Camera& camera, const DrawOptions& o) {
+  Impl& m = *impl_;
+  line_rates(*m.cage, m.topo, camera, o.pixels_per_segment, m.rates);
+  gl::upload(m.lines, m.lines_cap, m.rates.data(), m.rates.size() * sizeof(float));
+  const std::array<float, 16> vp = gl::view_projection(camera, m.bounds);
+  Capture out;
+  // Nothing is drawn, but a draw needs a complete framebuffer (a surfaceless context has none).
+  if (!m.capture_fbo.get()) {
+    GLuint f = 0, rb = 0;
+    glCreateFramebuffers(1, &f);
+    glCreateRenderbuffers(1, &rb);
+    m.capture_fbo = gl::Framebuffer(f), m.capture_rb = gl::Renderbuffer(rb);
+    glNamedRenderbufferStorage(rb, GL_RGBA8, 1, 1);
+    glNamedFramebufferRenderbuffer(f, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, rb);
+  }
+  GLint previous = 0;
+  glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &previous);
+  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, m.capture_fbo.get());
+  glEnable(GL_RASTERIZER_DISCARD);
+  glBindVertexArray(m.vao.get());
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, m.points.get());
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, m.infos.get());
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, m.lines.get());
+  for (int pass = 0; pass < 2; ++pass) {
+    const size_t count = pass ? m.gregory : m.regular;
+    if (!count) continue;
+    const int cvs = pass ? 20 : 16;
+    const GLuint prog = (pass ? m.gregory_capture : m.regular_capture).get();
+    glUseProgram(prog);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, (pass ? m.gregory_cvs : m.regular_cvs).get());
+    glUniform1ui(glGetUniformLocation(prog, "patch_base"), pass ? GLuint(m.regular) : 0u);
+    glUniform1i(glGetUniformLocation(prog, "factor"), o.factor);
+    glUniformMatrix4fv(glGetUniformLocation(prog, "view_proj"), 1, GL_FALSE, vp.data());
+    glPatchParameteri(GL_PATCH_VERTICES, cvs);
+    // Room for the largest tessellation of a patch: inner levels up to 2 x the rate (an edge
+    // bordering finer patches), 2 triangles of 3 points per inner cell.
+    const size_t rate = o.factor > 0 ? 2 * size_t(o.factor) : 64;
+    const size_t per_patch = 2 * (rate + 1) * (rate + 1) * 3, floats = 6;
+    const size_t batch_max =
+        std::min(m.chunk, std::max<size_t>(1, (size_t(64) << 20) / (per_patch * floats * 4)));
+    gl::Buffer tf;
+    size_t tf_bytes = 0;
+    GLuint qn = 0;
+    glCreateQueries(GL_TRANSFORM_FEEDBACK_PRIMITIVES_WRITTEN, 1, &qn);
+    const gl::Query q(qn);
+    std::vector<float> data;
+    for (size_t first = 0; first < count;) {
+      const size_t batch = std::min(count - first, batch_max);
+      const size_t bytes = batch * per_patch * floats * 4;
+      if (bytes > tf_bytes) tf = gl::buffer(nullptr, bytes, true), tf_bytes = bytes;
+      glBindBufferBase(GL_TRANSFORM_FEEDBACK_BUFFER, 0, tf.get());
+      glBeginQuery(GL_TRANSFORM_FEEDBACK_PRIMITIVES_WRITTEN, qn);
+      glBeginTransformFeedback(GL_TRIANGLES);
+      glDrawArrays(GL_PATCHES, GLint(first * size_t(cvs)), GLsizei(batch * size_t(cvs)));
+      glEndTransformFeedback();
+      glEndQuery(GL_TRANSFORM_FEEDBACK_PRIMITIVES_WRITTEN);
+      GLuint64 prims = 0;
+      glGetQueryObjectui64v(qn, GL_QUERY_RESULT, &prims);
+      data.resize(size_t(prims) * 3 * floats);
+      glGetNamedBufferSubData(tf.get(), 0, GLsizeiptr(data.size() * 4), data.data());
+      for (size_t i = 0; i < data.size(); i += floats) {
+        uint32_t patch;
+        std::memcpy(&patch, &data[i + 5], 4);
+        out.coords.push_back({patch, data[i + 3], data[i + 4]});
+        out.positions.insert(out.positions.end(), &data[i], &data[i] + 3);
+      }
+      first += batch;
+    }
+  }
+  glDisable(GL_RASTERIZER_DISCARD);
+  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, GLuint(previous));
+  glBindVertexArray(0);
+  glUseProgram(0);
+  gl::check("PatchDrawer::capture");
+  return out;
+}
+
+}  // namespace limn
