@@ -230,7 +230,8 @@ void Refiner::visit_brick(Brick& b, const CellBox& bb, std::span<const uint32_t>
   b.avg = brick_avg(b);
 }
 
-void Refiner::visit_general(GeneralNode& n, const CellBox& nb, std::span<const uint32_t> tris) {
+void Refiner::visit_general(GeneralNode& n, const CellBox& nb, std::span<const uint32_t> tris,
+                            const std::vector<uint32_t>* parent_full) {
   std::vector<uint32_t> tc, full;
   for (int c = 0; c < 8; ++c) {
     const CellBox cb = box(nb.level + 1, 2 * nb.x + uint32_t(c & 1),
@@ -239,8 +240,16 @@ void Refiner::visit_general(GeneralNode& n, const CellBox& nb, std::span<const u
     filter(tris, cb, tc);
     if (tc.empty()) continue;
     const int level = cb.level;
+    // A child's full list, from its parent's when known (no BVH query, and no triangles from
+    // outside the parent's box to test).
+    auto child_full = [&] {
+      if (parent_full)
+        filter(*parent_full, cb, full);
+      else
+        full_tris(cb, tc, full);
+    };
     if (n.kind[c] == CellKind::empty) {
-      full_tris(cb, tc, full);
+      child_full();
       if (full.empty()) continue;
       n.kind[c] = CellKind::leaf;
       n.leaf[c] = make_leaf(full, nullptr);
@@ -252,7 +261,7 @@ void Refiner::visit_general(GeneralNode& n, const CellBox& nb, std::span<const u
           if (painter_) painter_->paint(cb, n.leaf[c], tc), ++stats.leaves_painted;
           break;
         }
-        full_tris(cb, tc, full);
+        child_full();
         // A cell the surface only grazes within the boxes' slack may have no sub-cell the surface
         // meets once rounded: it stays a leaf.
         if (level == depth_ - 2) {
@@ -266,7 +275,7 @@ void Refiner::visit_general(GeneralNode& n, const CellBox& nb, std::span<const u
           bool any = false;
           for (int k = 0; k < 8; ++k) any |= g.kind[k] != CellKind::empty;
           if (!any) break;
-          visit_general(g, cb, tc);
+          visit_general(g, cb, tc, &full);
           n.kind[c] = CellKind::general;
           store_general(g, 0, 0, n.ptr[c], n.info[c]);
         }

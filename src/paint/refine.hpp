@@ -66,7 +66,10 @@ class Refiner {
   bool meets(const CellBox& b) const;
   void full_tris(const CellBox& b, std::span<const uint32_t> region_tris,
                  std::vector<uint32_t>& out) const;
-  void visit_general(GeneralNode& n, const CellBox& nb, std::span<const uint32_t> tris);
+  /// `full` (may be null): every triangle meeting the node's box, when known (a node just made
+  /// by refining): its children's lists are filtered from it instead of queried.
+  void visit_general(GeneralNode& n, const CellBox& nb, std::span<const uint32_t> tris,
+                     const std::vector<uint32_t>* full = nullptr);
   void visit_brick(Brick& b, const CellBox& bb, std::span<const uint32_t> tris);
   /// A new general node for the leaf cell `cb` (refined one level).
   GeneralNode refine_leaf(const CellBox& cb, const LeafCell& leaf, std::span<const uint32_t> full);
