@@ -45,6 +45,26 @@ void Refiner::filter(std::span<const uint32_t> in, const CellBox& b,
       out.push_back(t);
 }
 
+void Refiner::split(std::span<const uint32_t> in, const CellBox& b, Split& out) const {
+  CellBox kids[8];
+  for (int c = 0; c < 8; ++c) kids[c] = child(b, c), out[size_t(c)].clear();
+  const float cx = b.c.x, cy = b.c.y, cz = b.c.z;
+  for (uint32_t t : in) {
+    const V3 p0 = v3(s_.corner(t, 0)), p1 = v3(s_.corner(t, 1)), p2 = v3(s_.corner(t, 2));
+    const bool lo[3] = {std::min({p0.x, p1.x, p2.x}) <= cx + slack_,
+                        std::min({p0.y, p1.y, p2.y}) <= cy + slack_,
+                        std::min({p0.z, p1.z, p2.z}) <= cz + slack_};
+    const bool hi[3] = {std::max({p0.x, p1.x, p2.x}) >= cx - slack_,
+                        std::max({p0.y, p1.y, p2.y}) >= cy - slack_,
+                        std::max({p0.z, p1.z, p2.z}) >= cz - slack_};
+    for (int c = 0; c < 8; ++c) {
+      if (!((c & 1 ? hi[0] : lo[0]) && (c & 2 ? hi[1] : lo[1]) && (c & 4 ? hi[2] : lo[2])))
+        continue;
+      if (tri_box_overlap(kids[c].c, kids[c].h, p0, p1, p2, slack_)) out[size_t(c)].push_back(t);
+    }
+  }
+}
+
 void Refiner::full_tris(const CellBox& b, std::span<const uint32_t> region_tris,
                         std::vector<uint32_t>& out) const {
   if (region_.everything) {
@@ -125,11 +145,10 @@ uint32_t Refiner::store_brick(const Brick& b, uint32_t old_word) {
 GeneralNode Refiner::refine_leaf(const CellBox& cb, const LeafCell& leaf,
                                  std::span<const uint32_t> full) {
   GeneralNode g;
-  std::vector<uint32_t> fc;
+  Split parts;
+  split(full, cb, parts);
   for (int c = 0; c < 8; ++c) {
-    const CellBox b = box(cb.level + 1, 2 * cb.x + uint32_t(c & 1), 2 * cb.y + uint32_t(c >> 1 & 1),
-                          2 * cb.z + uint32_t(c >> 2 & 1));
-    filter(full, b, fc);
+    const std::vector<uint32_t>& fc = parts[size_t(c)];
     if (fc.empty()) continue;
     g.kind[c] = CellKind::leaf;
     g.leaf[c] = make_leaf(fc, &leaf);
@@ -141,16 +160,13 @@ GeneralNode Refiner::refine_leaf(const CellBox& cb, const LeafCell& leaf,
 
 Brick Refiner::make_brick(const CellBox& cb, const LeafCell& leaf, std::span<const uint32_t> full) {
   Brick b;
-  std::vector<uint32_t> f1, f2;
+  Split p1, p2;
+  split(full, cb, p1);
   for (int c1 = 0; c1 < 8; ++c1) {
-    const CellBox b1 = box(cb.level + 1, 2 * cb.x + uint32_t(c1 & 1),
-                           2 * cb.y + uint32_t(c1 >> 1 & 1), 2 * cb.z + uint32_t(c1 >> 2 & 1));
-    filter(full, b1, f1);
-    if (f1.empty()) continue;
+    if (p1[size_t(c1)].empty()) continue;
+    split(p1[size_t(c1)], child(cb, c1), p2);
     for (int c2 = 0; c2 < 8; ++c2) {
-      const CellBox b2 = box(cb.level + 2, 2 * b1.x + uint32_t(c2 & 1),
-                             2 * b1.y + uint32_t(c2 >> 1 & 1), 2 * b1.z + uint32_t(c2 >> 2 & 1));
-      filter(f1, b2, f2);
+      const std::vector<uint32_t>& f2 = p2[size_t(c2)];
       if (f2.empty()) continue;
       const int m = 8 * c1 + c2;
       b.mask |= uint64_t(1) << m;
@@ -204,19 +220,16 @@ bool Refiner::try_compact(const GeneralNode& n, Brick& out) const {
 }
 
 void Refiner::visit_brick(Brick& b, const CellBox& bb, std::span<const uint32_t> tris) {
-  std::vector<uint32_t> t1, t2;
+  Split p1, p2;
+  split(tris, bb, p1);
   for (int c1 = 0; c1 < 8; ++c1) {
-    const CellBox b1 = box(bb.level + 1, 2 * bb.x + uint32_t(c1 & 1),
-                           2 * bb.y + uint32_t(c1 >> 1 & 1), 2 * bb.z + uint32_t(c1 >> 2 & 1));
-    if (!meets(b1)) continue;
-    filter(tris, b1, t1);
-    if (t1.empty()) continue;
+    const CellBox b1 = child(bb, c1);
+    if (p1[size_t(c1)].empty() || !meets(b1)) continue;
+    split(p1[size_t(c1)], b1, p2);
     for (int c2 = 0; c2 < 8; ++c2) {
-      const CellBox b2 = box(bb.level + 2, 2 * b1.x + uint32_t(c2 & 1),
-                             2 * b1.y + uint32_t(c2 >> 1 & 1), 2 * b1.z + uint32_t(c2 >> 2 & 1));
-      if (!meets(b2)) continue;
-      filter(t1, b2, t2);
-      if (t2.empty()) continue;
+      const CellBox b2 = child(b1, c2);
+      const std::vector<uint32_t>& t2 = p2[size_t(c2)];
+      if (t2.empty() || !meets(b2)) continue;
       const int m = 8 * c1 + c2;
       if (!(b.mask >> m & 1)) {
         // A surface cell the brick lacks: the texture was made for another mesh.
@@ -232,21 +245,24 @@ void Refiner::visit_brick(Brick& b, const CellBox& bb, std::span<const uint32_t>
 
 void Refiner::visit_general(GeneralNode& n, const CellBox& nb, std::span<const uint32_t> tris,
                             const std::vector<uint32_t>* parent_full) {
-  std::vector<uint32_t> tc, full;
+  std::vector<uint32_t> full;
+  Split parts, full_parts;
+  split(tris, nb, parts);
+  bool full_split = false;
   for (int c = 0; c < 8; ++c) {
-    const CellBox cb = box(nb.level + 1, 2 * nb.x + uint32_t(c & 1),
-                           2 * nb.y + uint32_t(c >> 1 & 1), 2 * nb.z + uint32_t(c >> 2 & 1));
-    if (!meets(cb)) continue;
-    filter(tris, cb, tc);
-    if (tc.empty()) continue;
+    const CellBox cb = child(nb, c);
+    const std::vector<uint32_t>& tc = parts[size_t(c)];
+    if (tc.empty() || !meets(cb)) continue;
     const int level = cb.level;
     // A child's full list, from its parent's when known (no BVH query, and no triangles from
     // outside the parent's box to test).
     auto child_full = [&] {
-      if (parent_full)
-        filter(*parent_full, cb, full);
-      else
+      if (parent_full) {
+        if (!full_split) split(*parent_full, nb, full_parts), full_split = true;
+        full = full_parts[size_t(c)];
+      } else {
         full_tris(cb, tc, full);
+      }
     };
     if (n.kind[c] == CellKind::empty) {
       child_full();

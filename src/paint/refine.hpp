@@ -2,6 +2,7 @@
 // reaches. Internal header of the paint layer.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -56,6 +57,15 @@ class Refiner {
   CellBox box(int level, uint32_t x, uint32_t y, uint32_t z) const;
   /// The triangles of `in` meeting the box (order kept).
   void filter(std::span<const uint32_t> in, const CellBox& b, std::vector<uint32_t>& out) const;
+  /// The same for each of b's 8 children at once: a triangle is tested only against the
+  /// children its bounding box reaches (1-2 of 8 deep in the tree). out[c] as filter() gives.
+  using Split = std::array<std::vector<uint32_t>, 8>;
+  void split(std::span<const uint32_t> in, const CellBox& b, Split& out) const;
+  /// Child c of a box.
+  CellBox child(const CellBox& b, int c) const {
+    return box(b.level + 1, 2 * b.x + uint32_t(c & 1), 2 * b.y + uint32_t(c >> 1 & 1),
+               2 * b.z + uint32_t(c >> 2 & 1));
+  }
   /// A new leaf for a cell whose triangles are `tris` (non-empty), with colours inherited from
   /// `parent` (null: background).
   LeafCell make_leaf(std::span<const uint32_t> tris, const LeafCell* parent) const;
