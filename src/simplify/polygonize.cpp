@@ -501,20 +501,23 @@ class Mesher {
       for (size_t i = 0; i < loops.size(); ++i) {
         for (bool again = true; again;) {
           again = false;
-          std::vector<uint32_t>& q = loops[i];
-          std::unordered_map<uint32_t, size_t> at;
-          for (size_t j = 0; j < q.size() && !again; ++j) {
-            auto [it, fresh] = at.try_emplace(q[j], j);
-            if (fresh) continue;
-            const size_t a = it->second;
-            std::vector<uint32_t> inner(q.begin() + ptrdiff_t(a), q.begin() + ptrdiff_t(j));
-            q.erase(q.begin() + ptrdiff_t(a), q.begin() + ptrdiff_t(j));
-            if (inner.size() < 3 || q.size() < 3) {
-              return k;
+          std::vector<uint32_t> inner;
+          {
+            std::vector<uint32_t>& q = loops[i];
+            std::unordered_map<uint32_t, size_t> at;
+            for (size_t j = 0; j < q.size(); ++j) {
+              auto [it, fresh] = at.try_emplace(q[j], j);
+              if (fresh) continue;
+              const size_t a = it->second;
+              inner.assign(q.begin() + ptrdiff_t(a), q.begin() + ptrdiff_t(j));
+              q.erase(q.begin() + ptrdiff_t(a), q.begin() + ptrdiff_t(j));
+              if (inner.size() < 3 || q.size() < 3) return k;
+              again = true;
+              break;
             }
-            loops.push_back(std::move(inner));
-            again = true;
           }
+          // Appended only once `q` is no longer used: appending may move the loops.
+          if (again) loops.push_back(std::move(inner));
         }
       }
       std::sort(loops.begin(), loops.end(),
