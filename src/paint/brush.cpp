@@ -424,11 +424,7 @@ bool pick_screen(const OctreeTexture& t, const PaintSurface& s, const PaintCamer
 namespace {
 
 Rgba8 average_brick(OctreeEditor& ed, uint32_t word) {
-  const Brick b = decode_brick(ed.pool(), word);
-  ColorMean m;
-  for (int k = 0; k < 64; ++k)
-    if (b.mask >> k & 1) add_leaf(m, b.cell[k]);
-  const Rgba8 avg = m.mean();
+  const Rgba8 avg = brick_average(decode_brick(ed.pool(), word));
   ed.set((word & ~octree::kBrickDoubleFlag) + ((word & octree::kBrickDoubleFlag) ? 4 : 2), avg);
   return avg;
 }

@@ -106,6 +106,21 @@ inline void add_leaf(ColorMean& m, const LeafCell& c) {
   m.add(two.mean());
 }
 
+/// A brick's average: the mean of its inner nodes' averages, each the mean of its leaf cells,
+/// the same rule a general node follows (occupied cells weighted equally at every level), so
+/// a mip value does not depend on whether a region is stored as a brick or as general nodes.
+inline Rgba8 brick_average(const Brick& b) {
+  ColorMean outer;
+  for (int c1 = 0; c1 < 8; ++c1) {
+    if (!(b.mask >> (8 * c1) & 255u)) continue;
+    ColorMean inner;
+    for (int c2 = 0; c2 < 8; ++c2)
+      if (b.mask >> (8 * c1 + c2) & 1) add_leaf(inner, b.cell[8 * c1 + c2]);
+    outer.add(inner.mean());
+  }
+  return outer.mean();
+}
+
 /// Every write to a texture's pool goes through here, so the journal sees it.
 class OctreeEditor {
  public:

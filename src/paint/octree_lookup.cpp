@@ -320,18 +320,24 @@ bool OctreeSampler::cell_value(uint32_t x, uint32_t y, uint32_t z, int level, co
       }
       if (l + 2 == level) {
         // A brick's inner node: its cells are contiguous in Morton order, so its average is
-        // one short run of samples.
+        // one short run of samples (a two-sided cell counts once, the mean of its sides).
         const uint64_t mask = uint64_t(pool[bp]) | uint64_t(pool[bp + 1]) << 32;
         const uint64_t dbl =
             (w & kFlag) ? uint64_t(pool[bp + 2]) | uint64_t(pool[bp + 3]) << 32 : 0;
         const uint32_t c1 = octant(x, y, z, kD - 2 - l);
         if (!(mask >> (8 * c1) & 255u)) return false;
         const uint64_t lo = (uint64_t(1) << (8 * c1)) - 1;
-        const uint64_t hi = c1 == 7 ? ~uint64_t(0) : (uint64_t(1) << (8 * c1 + 8)) - 1;
-        const uint32_t first = uint32_t(std::popcount(mask & lo) + std::popcount(dbl & lo));
-        const uint32_t last = uint32_t(std::popcount(mask & hi) + std::popcount(dbl & hi));
-        out =
-            premul_mean(pool + bp + hdr + 1 + (std::popcount(mask) + 7) / 8 + first, last - first);
+        uint32_t at = bp + hdr + 1 + uint32_t(std::popcount(mask) + 7) / 8 +
+                      uint32_t(std::popcount(mask & lo) + std::popcount(dbl & lo));
+        Rgba8 cells[8];
+        size_t count = 0;
+        for (int c2 = 0; c2 < 8; ++c2) {
+          const int m = 8 * int(c1) + c2;
+          if (!(mask >> m & 1)) continue;
+          cells[count++] = (dbl >> m & 1) ? premul_mean(pool + at, 2) : pool[at];
+          at += (dbl >> m & 1) ? 2 : 1;
+        }
+        out = premul_mean(cells, count);
         return true;
       }
       return brick_leaf(pool, w, l + 1, x, y, z, n, out, nullptr);

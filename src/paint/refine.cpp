@@ -118,10 +118,7 @@ Rgba8 Refiner::general_avg(const GeneralNode& n) const {
 }
 
 Rgba8 Refiner::brick_avg(const Brick& b) {
-  ColorMean m;
-  for (int k = 0; k < 64; ++k)
-    if (b.mask >> k & 1) add_leaf(m, b.cell[k]);
-  return m.mean();
+  return brick_average(b);
 }
 
 void Refiner::store_general(const GeneralNode& n, uint32_t old_ptr, uint32_t old_info,

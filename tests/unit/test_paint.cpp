@@ -234,6 +234,107 @@ TEST(PaintOctree, LookupsEqualAMapOfTheCellsOnSpot) {
   expect_lookups_match(t, m, rng);
 }
 
+// The mip average of a cell, recomputed from the map: a leaf's value (both sides averaged), or
+// the mean of its occupied children's averages, premultiplied by alpha and rounded to RGBA8 at
+// every level, as the header documents.
+using CellKey = std::tuple<int, uint32_t, uint32_t, uint32_t>;
+
+// Every cell above a leaf of the map (where averages live).
+std::set<CellKey> ancestors(const test::CellMap& map) {
+  std::set<CellKey> out;
+  for (const auto& [key, cell] : map.cells) {
+    auto [l, x, y, z] = key;
+    while (l > 0) --l, x >>= 1, y >>= 1, z >>= 1, out.insert({l, x, y, z});
+  }
+  return out;
+}
+
+Rgba8 reference_average(const test::CellMap& map, const std::set<CellKey>& above, int level,
+                        uint32_t x, uint32_t y, uint32_t z, bool& any) {
+  auto it = map.cells.find({level, x, y, z});
+  auto mean = [](const std::vector<Rgba8>& v) -> Rgba8 {
+    double r = 0, g = 0, b = 0, a = 0;
+    for (Rgba8 c : v) {
+      const double al = channel(c, 3);
+      r += channel(c, 0) * al, g += channel(c, 1) * al, b += channel(c, 2) * al, a += al;
+    }
+    if (v.empty() || a <= 0) return 0;
+    auto q = [](double d) { return uint32_t(std::clamp(std::lround(d), 0l, 255l)); };
+    return pack_rgba8(q(r / a), q(g / a), q(b / a), q(a / double(v.size())));
+  };
+  if (it != map.cells.end()) {
+    any = true;
+    return it->second.dbl ? mean({it->second.s[0], it->second.s[1]}) : it->second.s[0];
+  }
+  if (!above.count({level, x, y, z})) {
+    any = false;
+    return 0;
+  }
+  std::vector<Rgba8> kids;
+  for (uint32_t c = 0; c < 8; ++c) {
+    bool k = false;
+    const Rgba8 v = reference_average(map, above, level + 1, 2 * x + (c & 1), 2 * y + (c >> 1 & 1),
+                                      2 * z + (c >> 2), k);
+    if (k) kids.push_back(v);
+  }
+  any = !kids.empty();
+  return mean(kids);
+}
+
+TEST(PaintOctree, MipAveragesAreTheMeansOfTheirCells) {
+  std::mt19937 rng(21);
+  const Mesh m = test::uv_sphere(1.0, 16, 32);
+  const PaintSurface s(m);
+  OctreeTexture t = OctreeTexture::create(s, pack_rgba8(255, 255, 255, 128));
+  paint_random(t, s, m, rng, 10, {6, 8}, 0.1f);
+  const test::CellMap map(t);
+  const std::set<CellKey> above = ancestors(map);
+  OctreeSampler smp(t);
+  size_t compared = 0;
+  std::uniform_int_distribution<uint32_t> coord(0, 65535);
+  for (int i = 0; i < 3000; ++i) {
+    const uint32_t x = coord(rng), y = coord(rng), z = coord(rng);
+    const int level = int(rng() % 8);
+    // Only cells whose subtree holds no leaf coarser than them (those read as the leaf).
+    int leaf_level = 0;
+    if (map.leaf(x, y, z, &leaf_level) && leaf_level <= level) continue;
+    bool any = false;
+    const Rgba8 want = reference_average(map, above, level, x >> (16 - level), y >> (16 - level),
+                                         z >> (16 - level), any);
+    Rgba8 got;
+    const bool found = smp.cell_value(x, y, z, level, nullptr, got);
+    ASSERT_EQ(found, any) << level;
+    if (!any) continue;
+    for (int k = 0; k < 4; ++k)
+      ASSERT_NEAR(double(channel(got, k)), double(channel(want, k)), 1.0) << level << " " << k;
+    ++compared;
+  }
+  EXPECT_GT(compared, 300u);
+  // A wide footprint reads the averages: at a red/blue boundary it mixes, a point lookup does not.
+  const Mesh sh = test::sheet(-1, 1, -1, 1, 0, 8, true);
+  const PaintSurface ss(sh);
+  OctreeTexture u = OctreeTexture::create(ss);
+  for (const auto& [x, r, b] : {std::tuple{-0.5f, 1.0f, 0.0f}, std::tuple{0.5f, 0.0f, 1.0f}}) {
+    Brush br;
+    br.depth = 8, br.radius = 0.52f, br.hardness = 1;
+    br.color[0] = r, br.color[1] = 0, br.color[2] = b, br.color[3] = 1;
+    StrokePainter p(u, ss);
+    p.begin(br);
+    const float at[3] = {x, 0, 0};
+    p.dab_world(at);
+    p.end();
+  }
+  const float up[3] = {0, 0, 1}, at[3] = {-0.06f, 0.0f, 0.0f};
+  float sharp[4], wide[4];
+  OctreeSampler su(u);
+  ASSERT_TRUE(su.filtered(at, up, 0.0f, sharp));
+  ASSERT_TRUE(su.filtered(at, up, 0.3f, wide));
+  EXPECT_GT(sharp[0], 0.9f);
+  EXPECT_LT(sharp[2], 0.1f);
+  EXPECT_GT(wide[0], 0.2f);
+  EXPECT_GT(wide[2], 0.2f);
+}
+
 TEST(PaintOctree, FreedBlocksAreRecycledAndEveryWordIsAccountedFor) {
   const Mesh m = test::uv_sphere(1.0, 16, 32);
   const PaintSurface s(m);

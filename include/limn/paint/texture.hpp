@@ -54,10 +54,12 @@
 //
 // ## Mip averages
 //
-// Each general node and brick keeps the average of its cells (premultiplied by alpha, cells
-// weighted equally, both sides of double cells), so a footprint wider than a leaf reads one
-// texel per level. Averages ignore sides: the no-bleed guarantee holds for nearest and
-// leaf-level filtered lookups.
+// Each general node and brick keeps the average of its cells: the mean of its occupied cells'
+// values premultiplied by alpha, rounded to RGBA8, where a leaf's value is its sample (the mean
+// of both sides for a two-sided cell) and an inner cell's value is its own average (a brick's
+// eight inner nodes are averaged on the fly by the same rule). A footprint wider than a leaf
+// then reads one texel per level. Averages ignore sides: the no-bleed guarantee holds for
+// nearest and leaf-level filtered lookups.
 //
 // Blocks are recycled through free lists, one per block size. Every word write can be journaled
 // (undo/redo per stroke, see undo.hpp).
