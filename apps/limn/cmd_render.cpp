@@ -17,7 +17,7 @@ void add_render(CLI::App& app) {
   auto* cmd = app.add_subcommand("render", "Render a mesh or its adaptive limit surface to PNG");
   struct Opts {
     std::string mesh, out, format, background = "1,1,1";
-    bool adaptive = false, wireframe = false, json = false;
+    bool adaptive = false, wireframe = false, flat = false, json = false;
     int samples = 4;
     AdaptiveOpts a;
   };
@@ -42,6 +42,7 @@ void add_render(CLI::App& app) {
   cmd->add_option("--tess-px", o->a.tess_px,
                   "--adaptive: about one segment per PX pixels of cage edge (default 8)");
   cmd->add_flag("--wireframe", o->wireframe, "Outline the patches (or the mesh's polygons)");
+  cmd->add_flag("--flat", o->flat, "Mesh: one normal per polygon (faceted), not per vertex");
   cmd->add_flag("--depth-colors", o->a.depth_colors,
                 "--adaptive: colour each patch by its refinement level");
   cmd->add_option("--samples", o->samples, "Multisampling (1-16, default 4)");
@@ -55,6 +56,7 @@ void add_render(CLI::App& app) {
       for (const char* a : {"--depth", "--tolerance", "--max-depth", "--errors", "--tess",
                             "--tess-px", "--depth-colors"})
         if (cmd->count(a)) throw InputError(fmt::format("{} goes with --adaptive", a));
+    if (o->adaptive && o->flat) throw InputError("--flat is for meshes, not --adaptive");
     if (o->samples < 1 || o->samples > 16)
       throw InputError(fmt::format("--samples {}: must be 1-16", o->samples));
     o->a.dynamic = cmd->count("--tolerance") > 0;
@@ -114,7 +116,7 @@ void add_render(CLI::App& app) {
     } else {
       cam = frame_camera(mesh, w, h);
       if (!o->a.camera.empty()) cam = parse_camera(o->a.camera, cam);
-      MeshDrawer drawer(mesh);
+      MeshDrawer drawer(mesh, {}, o->flat);
       timings["upload"] = sw.lap();
       target.begin(bg);
       st = drawer.draw(cam, d);

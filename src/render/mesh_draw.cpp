@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <chrono>
+#include <cmath>
 #include <vector>
 
 #include "gl_util.hpp"
@@ -50,10 +51,64 @@ void main() {
 )";
 
 // Per corner: position, normal, colour, and barycentrics whose component for an edge inside a
-// polygon (a fan diagonal) is lifted by 1, so only polygon edges are outlined.
+// polygon (a diagonal of its triangulation) is lifted by 1, so only polygon edges are outlined.
 struct Vertex {
   float pos[3], nrm[3], col[3], bary[3];
 };
+
+// Triangles of polygon `f` as triples of corner offsets 0..n-1: ear clipping in the plane of its
+// Newell normal, so concave polygons (VSA's cluster polygons, holes bridged) come out right;
+// a fan for what is left when no ear is found (degenerate input).
+void triangulate(const Mesh& m, size_t f, std::vector<uint32_t>& out) {
+  const uint32_t b = m.face_offsets[f], n = m.face_size(f);
+  out.clear();
+  if (n == 3) {
+    out.insert(out.end(), {0, 1, 2});
+    return;
+  }
+  float nv[3];
+  face_area_vector(m, f, nv);
+  int drop = 0;
+  for (int k = 1; k < 3; ++k)
+    if (std::abs(nv[k]) > std::abs(nv[drop])) drop = k;
+  const int ax = (drop + 1) % 3, ay = (drop + 2) % 3;
+  const double sign = nv[drop] >= 0 ? 1.0 : -1.0;
+  std::vector<double> x(n), y(n);
+  for (uint32_t i = 0; i < n; ++i) {
+    const float* p = &m.positions[3 * size_t(m.face_vertices[b + i])];
+    x[i] = p[ax], y[i] = p[ay];
+  }
+  auto cross = [&](uint32_t a, uint32_t c, uint32_t d) {
+    return ((x[c] - x[a]) * (y[d] - y[a]) - (y[c] - y[a]) * (x[d] - x[a])) * sign;
+  };
+  std::vector<uint32_t> ring(n);
+  for (uint32_t i = 0; i < n; ++i) ring[i] = i;
+  while (ring.size() > 3) {
+    bool clipped = false;
+    for (size_t i = 0; i < ring.size() && !clipped; ++i) {
+      const uint32_t a = ring[(i + ring.size() - 1) % ring.size()], c = ring[i],
+                     d = ring[(i + 1) % ring.size()];
+      if (cross(a, c, d) <= 0) continue;  // reflex or flat
+      bool empty = true;
+      for (const uint32_t q : ring) {
+        if (q == a || q == c || q == d) continue;
+        const bool at_corner = (x[q] == x[a] && y[q] == y[a]) || (x[q] == x[c] && y[q] == y[c]) ||
+                               (x[q] == x[d] && y[q] == y[d]);
+        if (!at_corner && cross(a, c, q) >= 0 && cross(c, d, q) >= 0 && cross(d, a, q) >= 0) {
+          empty = false;
+          break;
+        }
+      }
+      if (!empty) continue;
+      out.insert(out.end(), {a, c, d});
+      ring.erase(ring.begin() + long(i));
+      clipped = true;
+    }
+    if (!clipped) break;
+  }
+  for (size_t i = 1; i + 1 < ring.size(); ++i)
+    out.insert(out.end(), {ring[0], ring[i], ring[i + 1]});
+}
 
 }  // namespace
 
@@ -67,7 +122,7 @@ struct MeshDrawer::Impl {
   Box bounds;
 };
 
-MeshDrawer::MeshDrawer(const Mesh& mesh, std::span<const float> face_colors)
+MeshDrawer::MeshDrawer(const Mesh& mesh, std::span<const float> face_colors, bool flat)
     : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
   validate(mesh, "render mesh");
@@ -76,8 +131,9 @@ MeshDrawer::MeshDrawer(const Mesh& mesh, std::span<const float> face_colors)
                                  mesh.face_count()));
   m.faces = mesh.face_count();
   m.bounds = bounding_box(mesh);
-  const bool own_normals = !mesh.normals.empty() && !mesh.normal_indices.empty();
-  const std::vector<float> vn = own_normals ? std::vector<float>() : vertex_normals(mesh);
+  const bool own_normals = !flat && !mesh.normals.empty() && !mesh.normal_indices.empty();
+  const std::vector<float> vn = own_normals || flat ? std::vector<float>() : vertex_normals(mesh);
+  float fn[3] = {0, 0, 1};
   const bool vertex_colors = mesh.colors.size() == 4 * mesh.vertex_count();
   m.has_colors = vertex_colors || !face_colors.empty();
   std::vector<Vertex> out;
@@ -87,8 +143,9 @@ MeshDrawer::MeshDrawer(const Mesh& mesh, std::span<const float> face_colors)
     const uint32_t p = mesh.face_vertices[c];
     for (int k = 0; k < 3; ++k) {
       v.pos[k] = mesh.positions[3 * size_t(p) + size_t(k)];
-      v.nrm[k] = own_normals ? mesh.normals[3 * size_t(mesh.normal_indices[c]) + size_t(k)]
-                             : vn[3 * size_t(p) + size_t(k)];
+      v.nrm[k] = flat          ? fn[k]
+                 : own_normals ? mesh.normals[3 * size_t(mesh.normal_indices[c]) + size_t(k)]
+                               : vn[3 * size_t(p) + size_t(k)];
       v.col[k] = !face_colors.empty() ? face_colors[3 * f + size_t(k)]
                  : vertex_colors      ? mesh.colors[4 * size_t(p) + size_t(k)]
                                       : 1.0f;
@@ -96,18 +153,23 @@ MeshDrawer::MeshDrawer(const Mesh& mesh, std::span<const float> face_colors)
     }
     out.push_back(v);
   };
+  std::vector<uint32_t> tris;
   for (size_t f = 0; f < mesh.face_count(); ++f) {
     const uint32_t b = mesh.face_offsets[f], n = mesh.face_size(f);
-    for (uint32_t i = 1; i + 1 < n; ++i) {
-      // Triangle (0, i, i + 1): the edge opposite corner 0 is a polygon edge; the one opposite
-      // corner 1 (from 0 to i + 1) is one only for the last triangle, the one opposite corner
-      // 2 (from 0 to i) only for the first.
-      const float lift0 = 0, lift1 = i + 2 == n ? 0.0f : 1.0f, lift2 = i == 1 ? 0.0f : 1.0f;
-      const float b0[3] = {1 + lift0, lift1, lift2}, b1[3] = {lift0, 1 + lift1, lift2},
-                  b2[3] = {lift0, lift1, 1 + lift2};
-      corner(f, b, b0);
-      corner(f, b + i, b1);
-      corner(f, b + i + 1, b2);
+    triangulate(mesh, f, tris);
+    if (flat) face_area_vector(mesh, f, fn);
+    for (size_t t = 0; t < tris.size(); t += 3) {
+      // The edge opposite corner j is outlined only when it is an edge of the polygon.
+      float lift[3];
+      for (int j = 0; j < 3; ++j) {
+        const uint32_t p = tris[t + size_t(j + 1) % 3], q = tris[t + size_t(j + 2) % 3];
+        lift[j] = (p + 1) % n == q || (q + 1) % n == p ? 0.0f : 1.0f;
+      }
+      for (int j = 0; j < 3; ++j) {
+        float bary[3] = {lift[0], lift[1], lift[2]};
+        bary[j] += 1;
+        corner(f, b + tris[t + size_t(j)], bary);
+      }
     }
   }
   m.count = out.size();

@@ -70,9 +70,11 @@ class PatchDrawer {
 
 class MeshDrawer {
  public:
-  /// Uploads `mesh` (any polygons; its normals when it has them, else per-vertex area-weighted
-  /// ones; its vertex colours when it has them). `face_colors`: RGB per face, overriding.
-  explicit MeshDrawer(const Mesh& mesh, std::span<const float> face_colors = {});
+  /// Uploads `mesh` (any polygons, concave ones too: ear-clipped in their plane; its normals when
+  /// it has them, else per-vertex area-weighted ones, or each face's own with `flat`; its vertex
+  /// colours when it has them). `face_colors`: RGB per face, overriding. O(corners^2) worst case
+  /// per polygon, O(corners) for convex ones.
+  explicit MeshDrawer(const Mesh& mesh, std::span<const float> face_colors = {}, bool flat = false);
   ~MeshDrawer();
   MeshDrawer(const MeshDrawer&) = delete;
   MeshDrawer& operator=(const MeshDrawer&) = delete;
