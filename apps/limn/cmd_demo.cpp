@@ -1,13 +1,27 @@
-// limn demo: the workflow on built-in shapes, no input files needed. Grows with each layer; today
-// it builds every procedural cage, analyses it as `limn info` does, subdivides the small cages to
-// their limit surface, exports viewable meshes and writes a Markdown + JSON report.
+// limn demo: the whole workflow on built-in shapes, no input files needed: every procedural cage
+// analysed as `limn info` does; a cage's adaptive limit surface with a depth per vertex chosen for
+// a near and a far camera, drawn on the GPU with depth colours; scripted paint strokes into an
+// octree texture, baked and rendered; the painted surface simplified by VSA into a few polygons,
+// its partition rendered. Writes PNGs, meshes and a Markdown + JSON report.
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
+#include <memory>
 
 #include "common.hpp"
 #include "limn/mesh/shapes.hpp"
-#include "limn/subdiv/refine.hpp"
+#include "limn/paint/bake.hpp"
+#include "limn/paint/brush.hpp"
+#include "limn/paint/file.hpp"
+#include "limn/render/draw.hpp"
+#include "limn/render/gl_context.hpp"
+#include "limn/render/image.hpp"
+#include "limn/simplify/vsa.hpp"
+#include "limn/subdiv/depth.hpp"
+#include "limn/subdiv/patches.hpp"
+#include "limn/subdiv/tessellate.hpp"
 #include "limn/version.hpp"
 
 namespace limn::cli {
@@ -19,6 +33,251 @@ struct DemoShape {
   const char* what;
   bool export_mesh;  // the 800k-quad cages are analysed, not exported (tens of MB each)
 };
+
+constexpr int kWidth = 960, kHeight = 600;
+
+// A camera looking at `target` from direction `dir` at `distance`.
+Camera look(const float target[3], const double dir[3], double distance) {
+  Camera c;
+  c.width = kWidth, c.height = kHeight;
+  c.fovy_deg = 40.0f;
+  const double len = std::sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+  for (int k = 0; k < 3; ++k)
+    c.target[k] = target[k], c.eye[k] = float(target[k] + distance * dir[k] / len);
+  c.up[0] = 0, c.up[1] = 0, c.up[2] = 1;
+  return c;
+}
+
+// The whole cage from above one side, `zoom` times the distance that frames it.
+Camera overview(const Mesh& cage, float zoom) {
+  const Box b = bounding_box(cage);
+  const float centre[3] = {(b.min[0] + b.max[0]) / 2, (b.min[1] + b.max[1]) / 2,
+                           (b.min[2] + b.max[2]) / 2};
+  const double dir[3] = {0.8, -1.5, 1.1};
+  return look(centre, dir, zoom * 0.62 * b.diagonal() / std::tan(20.0 * 3.14159265358979 / 180));
+}
+
+void save_image(RenderTarget& target, const std::filesystem::path& path) {
+  write_png(path, target.width(), target.height(), target.read_rgba());
+}
+
+// A colour per cluster, spread around the hue circle so neighbours differ.
+std::vector<float> cluster_colors(std::span<const uint32_t> face_cluster) {
+  std::vector<float> out(3 * face_cluster.size());
+  for (size_t f = 0; f < face_cluster.size(); ++f) {
+    const double h = std::fmod(double(face_cluster[f]) * 0.618033988749895, 1.0) * 6.0;
+    const double x = 1.0 - std::abs(std::fmod(h, 2.0) - 1.0);
+    const double rgb[6][3] = {{1, x, 0}, {x, 1, 0}, {0, 1, x}, {0, x, 1}, {x, 0, 1}, {1, 0, x}};
+    for (int k = 0; k < 3; ++k) out[3 * f + size_t(k)] = float(0.35 + 0.55 * rgb[int(h) % 6][k]);
+  }
+  return out;
+}
+
+// A stroke around the z axis at z = height: for each of `bins` angles, the surface vertex nearest
+// that height among those in the angle's wedge (and within `band` of the height).
+std::vector<float> ring_stroke(const Mesh& m, float height, float band, int bins = 180) {
+  std::vector<std::pair<float, uint32_t>> best(size_t(bins), {band, kNone});
+  for (uint32_t v = 0; v < m.vertex_count(); ++v) {
+    const float* p = &m.positions[3 * size_t(v)];
+    const float d = std::abs(p[2] - height);
+    const double a = std::atan2(double(p[1]), double(p[0])) + 3.14159265358979323846;
+    const size_t bin = std::min(size_t(bins) - 1, size_t(a / (2 * 3.14159265358979323846) * bins));
+    if (d < best[bin].first) best[bin] = {d, v};
+  }
+  std::vector<float> xyz;
+  for (const auto& [d, v] : best)
+    if (v != kNone)
+      xyz.insert(xyz.end(), &m.positions[3 * size_t(v)], &m.positions[3 * size_t(v)] + 3);
+  return xyz;
+}
+
+// The workflow on the procedural torus (extraordinary vertices of valence 3, 5, 6 and 8).
+void workflow(const std::filesystem::path& dir, std::string& md, nlohmann::json& report) {
+  Stopwatch sw;
+  const Mesh cage = make_shape("torus");
+  md += fmt::format(
+      "\n## The workflow on the `torus` cage ({} quads)\n\n"
+      "Adaptive limit surface (per-vertex depth from the camera, 0.5 px tolerance), drawn on the "
+      "GPU with tessellation shaders; colours show each patch's refinement level (blue shallow, "
+      "red deep), lines the patch outlines. The near camera looks at the valence-{} vertex.\n\n",
+      cage.face_count(), 8);
+  nlohmann::json j;
+  std::unique_ptr<GlContext> gl;
+  try {
+    gl = std::make_unique<GlContext>();
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "demo: no OpenGL, images skipped ({})\n", e.what());
+    md += fmt::format("No OpenGL context ({}): images skipped.\n\n", e.what());
+  }
+  // 1. Adaptive surface: the hierarchy once, then a view change only selects.
+  PatchOptions po;
+  po.subdiv = subdiv_options(cage);
+  po.depth = 8;
+  fmt::print(stderr, "adaptive surface: patch hierarchy to depth {} ...", po.depth);
+  std::fflush(stderr);
+  const PatchHierarchy h = build_patch_hierarchy(cage, po);
+  VertexErrorModel model = vertex_error_model(cage, po.subdiv);
+  measure_vertex_errors(cage, h, model);
+  const std::vector<float> points = h.table.points(cage.positions);
+  const double t_hierarchy = sw.lap();
+  fmt::print(stderr, " {} nodes ({:.0f} ms)\n", h.node_count(), t_hierarchy);
+  std::unique_ptr<RenderTarget> target;
+  if (gl) target = std::make_unique<RenderTarget>(kWidth, kHeight, 4);
+  const float white[4] = {1, 1, 1, 1};
+  md +=
+      "| camera | patches | deepest level | select ms | GPU ms | image "
+      "|\n|---|---:|---:|---:|---:|---|\n";
+  // Far: the whole torus. Near: close to its valence-8 vertex, looking along its normal.
+  const std::vector<float> vn = vertex_normals(cage);
+  uint32_t star = 0, most = 0;
+  {
+    std::vector<uint32_t> valence(cage.vertex_count(), 0);
+    for (const uint32_t v : cage.face_vertices) ++valence[v];
+    for (uint32_t v = 0; v < cage.vertex_count(); ++v)
+      if (valence[v] > most) most = valence[v], star = v;
+  }
+  const double star_dir[3] = {vn[3 * star] + 0.3, vn[3 * star + 1] - 0.4, vn[3 * star + 2] + 0.3};
+  const Camera cameras[2] = {overview(cage, 1.0f), look(&cage.positions[3 * size_t(star)], star_dir,
+                                                        0.12 * bounding_box(cage).diagonal())};
+  for (int ci = 0; ci < 2; ++ci) {
+    const char* name = ci ? "near" : "far";
+    const Camera& cam = cameras[ci];
+    DepthOptions d;
+    d.tolerance_px = 0.5f;
+    d.max_depth = po.depth;
+    const std::vector<uint8_t> depth = select_depths(cage, model, cam, d);
+    const PatchTable sel = select_patches(h, depth);
+    const double t_select = sw.lap();
+    int deepest = 0;
+    for (const auto* params : {&sel.regular_params, &sel.gregory_params})
+      for (const PatchParam& p : *params) deepest = std::max(deepest, int(p.level));
+    const std::string file = fmt::format("surface-{}.png", name);
+    double gpu_ms = 0;
+    if (gl) {
+      PatchDrawer drawer(cage, sel, points);
+      target->begin(white);
+      DrawOptions o;
+      o.depth_colors = o.outline = true;
+      gpu_ms = drawer.draw(cam, o).gpu_ms;
+      save_image(*target, dir / file);
+    }
+    fmt::print(stderr, "adaptive surface, {} camera: {} patches, deepest level {}\n", name,
+               sel.patch_count(), deepest);
+    md += fmt::format("| {} | {} | {} | {:.2f} | {:.1f} | {} |\n", name, sel.patch_count(), deepest,
+                      t_select, gpu_ms, gl ? fmt::format("![{0}]({0})", file) : "-");
+    j["surface"][name] = {{"patches", sel.patch_count()},
+                          {"deepest_level", deepest},
+                          {"select_ms", t_select},
+                          {"gpu_ms", gpu_ms},
+                          {"image", file}};
+  }
+  sw.lap();
+
+  // 2. Paint: a dense tessellation of the surface, scripted strokes into an octree texture.
+  PatchOptions fixed = po;
+  fixed.depth = 2;
+  const PatchTable table = build_patches(cage, fixed);
+  TessellateOptions to;
+  to.factor = 6;
+  to.normals = false;
+  const Mesh dense = tessellate_patches(cage, table, table.points(cage.positions), to);
+  write_mesh(dense, dir / "torus-limit.obj");
+  fmt::print(stderr, "paint: {} triangles ...", dense.face_count());
+  std::fflush(stderr);
+  const PaintSurface surface(dense);
+  OctreeTexture texture = OctreeTexture::create(surface, pack_rgba8(235, 235, 225, 255));
+  const Box box = bounding_box(dense);
+  const float extent = box.diagonal();
+  StrokePainter painter(texture, surface);
+  struct Stroke {
+    float height;  // fraction of the height from the bottom
+    float color[4];
+    float radius;  // fraction of the diagonal
+  };
+  const Stroke strokes[] = {{0.95f, {0.85f, 0.15f, 0.1f, 1}, 0.035f},
+                            {0.5f, {0.1f, 0.35f, 0.85f, 1}, 0.05f},
+                            {0.08f, {0.95f, 0.7f, 0.1f, 1}, 0.03f}};
+  size_t dabs = 0;
+  for (const Stroke& s : strokes) {
+    Brush b;
+    std::copy(s.color, s.color + 4, b.color);
+    b.radius = s.radius * extent;
+    b.hardness = 0.6f;
+    b.depth = 9;
+    const float z = box.min[2] + s.height * (box.max[2] - box.min[2]);
+    const std::vector<float> xyz = ring_stroke(dense, z, 0.02f * extent);
+    if (xyz.empty()) continue;
+    painter.begin(b);
+    painter.stroke_world(xyz);
+    dabs += painter.end().dabs;
+  }
+  save_lot(texture, dir / "torus.lot");
+  Mesh painted = dense;
+  painted.colors = bake_vertex_colors(texture, dense);
+  write_mesh(painted, dir / "torus-painted.glb");
+  const OctreeTextureStats ts = texture.stats();
+  const double t_paint = sw.lap();
+  fmt::print(stderr, " {} dabs, {} texels, {:.1f} bytes per texel ({:.0f} ms)\n", dabs,
+             ts.painted_samples, ts.bytes_per_painted_texel, t_paint);
+  md += fmt::format(
+      "\nPaint: three scripted strokes ({} dabs) into an adaptive octree texture (no UVs), leaves "
+      "down to level 9 only under the brush: {} painted texels, {} bytes ({:.1f} per painted "
+      "texel), max depth {}; baked to vertex colours ([torus-painted.glb](torus-painted.glb), "
+      "texture [torus.lot](torus.lot)). {:.0f} ms.\n\n",
+      dabs, ts.painted_samples, ts.bytes, ts.bytes_per_painted_texel, ts.max_depth, t_paint);
+  if (gl) {
+    MeshDrawer drawer(painted);
+    target->begin(white);
+    drawer.draw(overview(cage, 1.0f), DrawOptions{});
+    save_image(*target, dir / "painted.png");
+    md += "![painted](painted.png)\n\n";
+  }
+  j["paint"] = {{"dabs", dabs},
+                {"painted_texels", ts.painted_samples},
+                {"bytes", ts.bytes},
+                {"max_depth", ts.max_depth},
+                {"ms", t_paint}};
+  sw.lap();
+
+  // 3. Simplify the painted surface back to a few polygons.
+  VsaOptions vo;
+  vo.proxies = 40;
+  vo.meshing.polygons = true;
+  fmt::print(stderr, "simplify: {} faces to {} proxies ...", dense.face_count(), vo.proxies);
+  std::fflush(stderr);
+  const VsaResult r = simplify_vsa(dense, vo, "torus-limit");
+  write_mesh(r.output.mesh, dir / "torus-simplified.obj");
+  const double t_simplify = sw.lap();
+  fmt::print(stderr, " {} polygons ({:.0f} ms)\n", r.output.mesh.face_count(), t_simplify);
+  md += fmt::format(
+      "Simplify: variational shape approximation (greedy optimiser) of the {} triangles into {} "
+      "clusters, E = {:.4g}, meshed as {} polygons ([torus-simplified.obj](torus-simplified.obj)). "
+      "{:.0f} ms.\n\n",
+      dense.face_count(), r.stats.clusters, r.stats.energy, r.output.mesh.face_count(), t_simplify);
+  if (gl) {
+    const Camera cam = overview(cage, 1.0f);
+    MeshDrawer partition(dense, cluster_colors(r.labels));
+    target->begin(white);
+    partition.draw(cam, DrawOptions{});
+    save_image(*target, dir / "partition.png");
+    MeshDrawer simplified(r.output.mesh, cluster_colors(r.output.face_cluster), true);
+    target->begin(white);
+    DrawOptions o;
+    o.outline = true;
+    simplified.draw(cam, o);
+    save_image(*target, dir / "simplified.png");
+    md +=
+        "| partition | polygons |\n|---|---|\n| ![partition](partition.png) | "
+        "![simplified](simplified.png) |\n\n";
+  }
+  j["simplify"] = {{"faces", dense.face_count()},
+                   {"clusters", r.stats.clusters},
+                   {"energy", r.stats.energy},
+                   {"polygons", r.output.mesh.face_count()},
+                   {"ms", t_simplify}};
+  if (gl) j["renderer"] = gl->renderer();
+  report["workflow"] = j;
+}
 
 }  // namespace
 
@@ -95,46 +354,7 @@ void add_demo(CLI::App& app) {
       j["timings_ms"] = {{"build", t_build}, {"topology", t_topo}, {"analysis", t_analyze}};
       report["shapes"].push_back(j);
     }
-    // Subdivision: the small cages, uniformly refined and pushed to the limit surface.
-    md +=
-        "\n## Subdivision surfaces\n\nUniform Catmull-Clark refinement with OpenSubdiv's rules "
-        "(creases, corners, boundaries, holes), points pushed to the limit with limit normals.\n\n"
-        "| cage | level | faces | refine ms | limit ms | output |\n|---|---:|---:|---:|---:|---|\n";
-    for (const char* name : {"cube", "torus", "cage"}) {
-      const int level = 3;
-      fmt::print(stderr, "subdivide {} to level {} ...", name, level);
-      std::fflush(stderr);
-      Stopwatch sw;
-      const Mesh cage = make_shape(name);
-      const UniformRefinement r = refine_uniform(cage, level, subdiv_options(cage));
-      const std::vector<float> pts = r.positions(cage, level);
-      const double t_refine = sw.lap();
-      const LimitStencils ls = limit_stencils(r, level);
-      Mesh surface;
-      surface.positions.resize(pts.size());
-      std::vector<float> t1(pts.size()), t2(pts.size());
-      apply_stencils(ls.position, pts.data(), surface.positions.data(), 3);
-      apply_stencils(ls.tangent1, pts.data(), t1.data(), 3);
-      apply_stencils(ls.tangent2, pts.data(), t2.data(), 3);
-      surface.normals = normals_from_tangents(t1, t2);
-      const double t_limit = sw.lap();
-      const RefinedLevel& L = r.levels.back();
-      for (size_t f = 0; f < L.face_count(); ++f)
-        if (!L.face_hole[f])
-          surface.add_face(
-              std::span<const uint32_t>(L.face_vertices.data() + L.face_offsets[f], 4));
-      surface.normal_indices = surface.face_vertices;
-      const std::string file = fmt::format("{}-limit-L{}.glb", name, level);
-      write_mesh(surface, dir / file);
-      fmt::print(stderr, " {} faces ({:.0f} ms)\n", surface.face_count(), sw.ms());
-      md += fmt::format("| {} | {} | {} | {:.1f} | {:.1f} | [{}]({}) |\n", name, level,
-                        surface.face_count(), t_refine, t_limit, file, file);
-      report["subdivision"].push_back({{"cage", name},
-                                       {"level", level},
-                                       {"faces", surface.face_count()},
-                                       {"output", file},
-                                       {"timings_ms", {{"refine", t_refine}, {"limit", t_limit}}}});
-    }
+    workflow(dir, md, report);
     md += "\nShapes:\n\n";
     for (const auto& s : shapes) md += fmt::format("- `{}`: {}\n", s.name, s.what);
     md += fmt::format("\nTotal time {:.0f} ms.\n", total.ms());

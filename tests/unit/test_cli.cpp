@@ -224,10 +224,28 @@ TEST_F(Cli, ShapeListAndDemo) {
   const auto j = nlohmann::json::parse(slurp(dir_ / "demo" / "report.json"));
   EXPECT_EQ(j["shapes"].size(), 5u);
   EXPECT_TRUE(fs::exists(dir_ / "demo" / "cage.glb"));
-  ASSERT_EQ(j["subdivision"].size(), 3u);
-  // The subdivided cage opens as a mesh of quads: 4^3 per cage corner, less the hole's.
-  EXPECT_TRUE(fs::exists(dir_ / "demo" / "cage-limit-L3.glb"));
-  EXPECT_EQ(j["subdivision"][0]["faces"], 6 * 4 * 16);  // cube: 24 quads at L1, x16 by L3
+  // The workflow: adaptive surface at two cameras, paint, bake, simplify, each with its images.
+  const auto& w = j["workflow"];
+  for (const char* f : {"surface-far.png", "surface-near.png", "painted.png", "partition.png",
+                        "simplified.png", "torus-painted.glb", "torus.lot", "torus-simplified.obj"})
+    EXPECT_GT(fs::file_size(dir_ / "demo" / f), 100u) << f;
+  // The near camera looks at the valence-8 vertex: deeper there than from afar.
+  EXPECT_GT(w["surface"]["near"]["deepest_level"].get<int>(),
+            w["surface"]["far"]["deepest_level"].get<int>());
+  EXPECT_GT(w["paint"]["painted_texels"].get<int>(), 0);
+  EXPECT_EQ(w["simplify"]["clusters"].get<int>(), 40);
+  EXPECT_GE(w["simplify"]["polygons"].get<int>(), 40);
+  // The baked mesh opens with a colour per vertex.
+  tinygltf::Model model;
+  tinygltf::TinyGLTF loader;
+  std::string err, warn;
+  ASSERT_TRUE(loader.LoadBinaryFromFile(&model, &err, &warn,
+                                        (dir_ / "demo" / "torus-painted.glb").string()))
+      << err;
+  const auto& attrs = model.meshes.at(0).primitives.at(0).attributes;
+  ASSERT_TRUE(attrs.count("COLOR_0"));
+  EXPECT_EQ(model.accessors[attrs.at("COLOR_0")].count,
+            model.accessors[attrs.at("POSITION")].count);
   // A file where the folder should be is bad usage.
   { std::ofstream(dir_ / "afile") << "x"; }
   EXPECT_EQ(limn("demo --quick -o " + q(dir_ / "afile")).code, 2);
