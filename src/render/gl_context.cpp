@@ -6,6 +6,18 @@
 
 #include <stdexcept>
 
+#if defined(__SANITIZE_ADDRESS__)
+#define LIMN_PIN_GL_LIBRARIES 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define LIMN_PIN_GL_LIBRARIES 1
+#endif
+#endif
+#ifdef LIMN_PIN_GL_LIBRARIES
+#include <dlfcn.h>
+#include <link.h>
+#endif
+
 namespace limn {
 
 namespace {
@@ -34,6 +46,22 @@ EGLDisplay open_display() {
   EGLDisplay d = eglGetDisplay(EGL_DEFAULT_DISPLAY);
   if (d != EGL_NO_DISPLAY && eglInitialize(d, nullptr, nullptr)) return d;
   throw egl_error("opening an EGL display (is Mesa's libegl-mesa0 installed?)");
+}
+
+// Under AddressSanitizer: the driver (Mesa, LLVM) keeps a few allocations to the end of the
+// process and unloads its libraries at eglTerminate, so LeakSanitizer reports them with no
+// module to tell them from ours. Pinning every loaded library keeps their names in the reports,
+// where tests/lsan.supp can name them.
+void pin_loaded_libraries() {
+#ifdef LIMN_PIN_GL_LIBRARIES
+  dl_iterate_phdr(
+      [](dl_phdr_info* info, size_t, void*) -> int {
+        if (info->dlpi_name && info->dlpi_name[0])
+          dlopen(info->dlpi_name, RTLD_NOW | RTLD_NOLOAD | RTLD_NODELETE);
+        return 0;
+      },
+      nullptr);
+#endif
 }
 
 }  // namespace
@@ -65,12 +93,14 @@ GlContext::GlContext() {
   }
   renderer_ = fmt::format("{}, {}", reinterpret_cast<const char*>(glGetString(GL_RENDERER)),
                           reinterpret_cast<const char*>(glGetString(GL_VERSION)));
+  pin_loaded_libraries();
 }
 
 GlContext::~GlContext() {
   EGLDisplay d = display_;
   eglMakeCurrent(d, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
   eglDestroyContext(d, static_cast<EGLContext>(context_));
+  pin_loaded_libraries();
   eglTerminate(d);
 }
 
