@@ -1,0 +1,293 @@
+#include "scene.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include "limn/mesh/io.hpp"
+#include "limn/paint/bake.hpp"
+#include "limn/paint/file.hpp"
+#include "limn/paint/surface.hpp"
+#include "limn/subdiv/refine.hpp"
+#include "limn/subdiv/tessellate.hpp"
+
+namespace limn::view {
+
+namespace {
+
+double ms_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// Cages above this are isolated per view instead of selected from a hierarchy, as `limn
+// subdivide --adaptive --errors auto` decides (the hierarchy is built whole, level by level).
+constexpr size_t kMeasuredFaces = 32768;
+// About this many triangles in the dense mesh painted on: fine enough for brush detail in the
+// baked vertex colours, small enough to re-bake after each stroke.
+constexpr double kDenseTriangles = 120000;
+
+void count_patches(const PatchTable& t, FrameStats& fs) {
+  fs.regular = t.regular_params.size(), fs.gregory = t.gregory_params.size();
+  fs.deepest = 0;
+  for (const auto* params : {&t.regular_params, &t.gregory_params})
+    for (const PatchParam& p : *params) fs.deepest = std::max(fs.deepest, int(p.level));
+}
+
+bool same_camera(const Camera& a, const Camera& b) {
+  return std::equal(a.eye, a.eye + 3, b.eye) && std::equal(a.target, a.target + 3, b.target) &&
+         std::equal(a.up, a.up + 3, b.up) && a.fovy_deg == b.fovy_deg && a.width == b.width &&
+         a.height == b.height;
+}
+
+}  // namespace
+
+std::vector<float> cluster_palette(const std::vector<uint32_t>& ids) {
+  // Hue steps by the golden ratio of a turn; saturation and value alternate, so clusters split
+  // from one another (neighbouring ids) differ even when their hues come out close.
+  std::vector<float> out(3 * ids.size());
+  for (size_t i = 0; i < ids.size(); ++i) {
+    const uint32_t id = ids[i];
+    const double h = std::fmod(double(id) * 0.618033988749895, 1.0) * 6.0;
+    const double s = id % 2 ? 0.75 : 0.45, v = (id / 2) % 2 ? 0.78 : 0.95;
+    const double f = h - std::floor(h);
+    const double p = v * (1 - s), q = v * (1 - s * f), t = v * (1 - s * (1 - f));
+    const double rgb[6][3] = {{v, t, p}, {q, v, p}, {p, v, t}, {p, q, v}, {t, p, v}, {v, p, q}};
+    for (int k = 0; k < 3; ++k) out[3 * i + size_t(k)] = float(rgb[int(h) % 6][k]);
+  }
+  return out;
+}
+
+Scene::Scene(Mesh cage, std::string name) : cage_(std::move(cage)), name_(std::move(name)) {
+  options_.subdiv = subdiv_options(cage_);
+}
+
+Scene::~Scene() = default;
+
+void Scene::release_gl() {
+  cage_drawer_.reset();
+  fixed_drawer_.reset();
+  dynamic_drawer_.reset();
+  painted_drawer_.reset();
+  clusters_drawer_.reset();
+  simplified_drawer_.reset();
+  fixed_depth_ = -1;
+}
+
+void Scene::ensure_hierarchy(int max_depth) {
+  if (hierarchy_depth_ == max_depth) return;
+  PatchOptions po = options_;
+  po.depth = max_depth;
+  model_ = vertex_error_model(cage_, po.subdiv);
+  measured_ = cage_.face_count() <= kMeasuredFaces;
+  hierarchy_ = {};
+  hierarchy_points_.clear();
+  if (measured_) {
+    hierarchy_ = build_patch_hierarchy(cage_, po);
+    measure_vertex_errors(cage_, hierarchy_, model_);
+    hierarchy_points_ = hierarchy_.table.points(cage_.positions);
+  }
+  hierarchy_depth_ = max_depth;
+  vdepth_.clear();
+  dynamic_drawer_.reset();
+}
+
+FrameStats Scene::draw(Display display, const Camera& camera, const SurfaceSettings& s,
+                       const DrawOptions& o) {
+  FrameStats fs;
+  if ((display == Display::clusters || display == Display::simplified) && !vsa_)
+    display = Display::painted;
+  switch (display) {
+    case Display::cage:
+      if (!cage_drawer_)
+        cage_drawer_ = std::make_unique<MeshDrawer>(cage_, std::span<float>{}, true);
+      fs.draw = cage_drawer_->draw(camera, o);
+      break;
+    case Display::surface:
+      if (!s.dynamic) {
+        if (fixed_depth_ != s.depth || !fixed_drawer_) {
+          const auto t0 = std::chrono::steady_clock::now();
+          PatchOptions po = options_;
+          po.depth = s.depth;
+          fixed_ = build_patches(cage_, po);
+          fixed_points_ = fixed_.points(cage_.positions);
+          fixed_drawer_ = std::make_unique<PatchDrawer>(cage_, fixed_, fixed_points_);
+          fixed_depth_ = s.depth;
+          fs.select_ms = ms_since(t0), fs.reselected = true;
+        }
+        count_patches(fixed_, fs);
+        fs.draw = fixed_drawer_->draw(camera, o);
+      } else {
+        ensure_hierarchy(s.max_depth);
+        const bool unchanged = dynamic_drawer_ && selected_tolerance_ == s.tolerance_px &&
+                               same_camera(selected_camera_, camera);
+        if (!unchanged) {
+          const auto t0 = std::chrono::steady_clock::now();
+          DepthOptions d;
+          d.tolerance_px = s.tolerance_px;
+          d.max_depth = s.max_depth;
+          // Hysteresis only across camera moves: a new tolerance starts from scratch.
+          const bool keep = selected_tolerance_ == s.tolerance_px;
+          std::vector<uint8_t> depth =
+              select_depths(cage_, model_, camera, d, keep ? vdepth_ : std::vector<uint8_t>{});
+          if (depth != vdepth_ || !dynamic_drawer_) {
+            vdepth_ = std::move(depth);
+            if (measured_) {
+              selection_ = select_patches(hierarchy_, vdepth_);
+              dynamic_drawer_ = std::make_unique<PatchDrawer>(cage_, selection_, hierarchy_points_);
+            } else {
+              PatchOptions po = options_;
+              po.depth = s.max_depth;
+              selection_ = build_patches(cage_, po, vdepth_);
+              selection_points_ = selection_.points(cage_.positions);
+              dynamic_drawer_ = std::make_unique<PatchDrawer>(cage_, selection_, selection_points_);
+            }
+            fs.reselected = true;
+          }
+          selected_tolerance_ = s.tolerance_px;
+          selected_camera_ = camera;
+          fs.select_ms = ms_since(t0);
+        }
+        count_patches(selection_, fs);
+        fs.draw = dynamic_drawer_->draw(camera, o);
+      }
+      break;
+    case Display::painted:
+      ensure_paint();
+      if (painted_dirty_ || !painted_drawer_) rebake();
+      fs.draw = painted_drawer_->draw(camera, o);
+      break;
+    case Display::clusters:
+      if (!clusters_drawer_)
+        clusters_drawer_ = std::make_unique<MeshDrawer>(dense(), cluster_palette(vsa_->labels));
+      fs.draw = clusters_drawer_->draw(camera, o);
+      break;
+    case Display::simplified:
+      if (!simplified_drawer_)
+        simplified_drawer_ = std::make_unique<MeshDrawer>(
+            vsa_->output.mesh, cluster_palette(vsa_->output.face_cluster), true);
+      fs.draw = simplified_drawer_->draw(camera, o);
+      break;
+  }
+  return fs;
+}
+
+const Mesh& Scene::dense() {
+  if (dense_) return *dense_;
+  if (!is_cage()) {
+    dense_ = cage_;
+    return *dense_;
+  }
+  // Depth 2 everywhere: every patch is a quad of the twice-refined cage, so one tessellation
+  // factor gives an even triangle size over the whole surface.
+  PatchOptions po = options_;
+  po.depth = 2;
+  const PatchTable t = build_patches(cage_, po);
+  TessellateOptions to;
+  to.factor = std::clamp(
+      int(std::sqrt(kDenseTriangles / (2.0 * double(std::max<size_t>(t.patch_count(), 1))))), 1,
+      16);
+  dense_ = tessellate_patches(cage_, t, t.points(cage_.positions), to);
+  return *dense_;
+}
+
+void Scene::ensure_paint() {
+  if (texture_) return;
+  const Mesh& m = dense();
+  surface_ = std::make_unique<PaintSurface>(m);
+  texture_ = std::make_unique<OctreeTexture>(
+      OctreeTexture::create(*surface_, pack_rgba8(214, 214, 220, 255)));
+  painter_ = std::make_unique<StrokePainter>(*texture_, *surface_, &history_);
+  painted_ = m;
+  painted_dirty_ = true;
+}
+
+void Scene::rebake() {
+  painted_.colors = bake_vertex_colors(*texture_, *dense_);
+  painted_drawer_ = std::make_unique<MeshDrawer>(painted_);
+  painted_dirty_ = false;
+}
+
+void Scene::begin_stroke(const Brush& brush, const Camera& camera) {
+  ensure_paint();
+  if (stroking_) end_stroke();
+  PaintCamera pc;
+  std::copy(camera.eye, camera.eye + 3, pc.eye);
+  std::copy(camera.target, camera.target + 3, pc.target);
+  std::copy(camera.up, camera.up + 3, pc.up);
+  pc.fovy_deg = camera.fovy_deg, pc.width = camera.width, pc.height = camera.height;
+  painter_->begin(brush, &pc);
+  stroking_ = true;
+  last_point_.clear();
+}
+
+bool Scene::stroke_to(double x, double y) {
+  if (!stroking_) throw std::logic_error("stroke_to outside a stroke");
+  bool hit = true;
+  // Each new segment starts with a dab at the previous point: within a stroke a texel keeps the
+  // strongest weight any dab gave it, so that repeated dab changes nothing.
+  if (last_point_.empty()) {
+    hit = painter_->dab_screen(x, y);
+  } else {
+    const double xy[4] = {last_point_[0], last_point_[1], x, y};
+    painter_->stroke_screen(xy);
+  }
+  last_point_ = {x, y};
+  painted_dirty_ = true;
+  return hit;
+}
+
+StrokeStats Scene::end_stroke() {
+  if (!stroking_) return {};
+  stroking_ = false;
+  painted_dirty_ = true;
+  return painter_->end();
+}
+
+bool Scene::undo() {
+  if (!texture_ || stroking_ || !history_.undo(*texture_)) return false;
+  painted_dirty_ = true;
+  return true;
+}
+
+bool Scene::redo() {
+  if (!texture_ || stroking_ || !history_.redo(*texture_)) return false;
+  painted_dirty_ = true;
+  return true;
+}
+
+void Scene::save_texture(const std::filesystem::path& path) {
+  ensure_paint();
+  save_lot(*texture_, path);
+}
+
+void Scene::load_texture(const std::filesystem::path& path) {
+  ensure_paint();
+  if (stroking_) end_stroke();
+  OctreeTexture t = load_lot(path);
+  // The painter holds a reference to *texture_: replace the contents, not the object.
+  *texture_ = std::move(t);
+  history_.clear();
+  painted_dirty_ = true;
+}
+
+const VsaResult& Scene::simplify(size_t proxies) {
+  const auto t0 = std::chrono::steady_clock::now();
+  VsaOptions vo;
+  vo.proxies = proxies;
+  vo.meshing.polygons = true;
+  vsa_ = simplify_vsa(dense(), vo, name_);
+  vsa_ms_ = ms_since(t0);
+  clusters_drawer_.reset();
+  simplified_drawer_.reset();
+  return *vsa_;
+}
+
+void Scene::export_simplified(const std::filesystem::path& path) const {
+  if (!vsa_) throw std::runtime_error(fmt::format("{}: nothing simplified yet", path.string()));
+  write_mesh(vsa_->output.mesh, path);
+}
+
+}  // namespace limn::view

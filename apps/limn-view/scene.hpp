@@ -1,0 +1,137 @@
+// limn-view: what the viewer shows and edits, independent of the window and the UI. It composes
+// the library as the limn CLI does: the adaptive surface (a patch hierarchy built once, then a
+// view change only re-selects depths and patches), paint on a dense tessellation of the surface
+// into an octree texture (baked to vertex colours for display), and VSA of that tessellation.
+// Drawing needs a current OpenGL 4.5 context; everything is built on first use.
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "limn/mesh/mesh.hpp"
+#include "limn/paint/brush.hpp"
+#include "limn/paint/undo.hpp"
+#include "limn/render/draw.hpp"
+#include "limn/simplify/vsa.hpp"
+#include "limn/subdiv/depth.hpp"
+#include "limn/subdiv/patches.hpp"
+#include "script.hpp"
+
+namespace limn::view {
+
+struct SurfaceSettings {
+  bool dynamic = true;        ///< a depth per vertex from the view, else one fixed depth
+  int depth = 3;              ///< fixed depth
+  float tolerance_px = 1.0f;  ///< dynamic: screen error allowed, pixels
+  int max_depth = 8;          ///< dynamic: the hierarchy's depth (a rebuild when changed)
+  float tess_px = 8.0f;       ///< about one tessellation segment per this many pixels
+};
+
+struct FrameStats {
+  DrawStats draw;
+  size_t regular = 0, gregory = 0;  ///< patches of the surface shown
+  int deepest = 0;                  ///< deepest patch level shown
+  double select_ms = 0;             ///< depth + patch selection (0 when the view kept them)
+  bool reselected = false;
+};
+
+class Scene {
+ public:
+  /// Takes the cage (or mesh) and its name for messages. Cheap: nothing is built yet.
+  Scene(Mesh cage, std::string name);
+  ~Scene();
+
+  const Mesh& cage() const { return cage_; }
+  const std::string& name() const { return name_; }
+  /// Meshes up to this many faces are treated as subdivision cages: their limit surface is drawn,
+  /// painted and simplified. Larger ones (scans) are painted and simplified as they are.
+  static constexpr size_t kCageFaces = 20000;
+  bool is_cage() const { return cage_.face_count() <= kCageFaces; }
+
+  /// Draws into the bound framebuffer. The surface re-selects its patches when the camera or
+  /// the settings changed its depths.
+  FrameStats draw(Display display, const Camera& camera, const SurfaceSettings& surface,
+                  const DrawOptions& options);
+
+  /// Deletes every GL object (drawers); the next draw makes them again. Call while the context
+  /// they were made in is still current (before its window closes).
+  void release_gl();
+
+  // Paint (on the dense mesh; screen strokes through a camera, radius in pixels).
+  void begin_stroke(const Brush& brush, const Camera& camera);
+  /// Paints from the last point (if any) to (x, y), window pixels. False when nothing was hit.
+  bool stroke_to(double x, double y);
+  StrokeStats end_stroke();
+  bool stroking() const { return stroking_; }
+  bool undo();
+  bool redo();
+  size_t undo_count() const { return history_.undo_count(); }
+  size_t redo_count() const { return history_.redo_count(); }
+  void save_texture(const std::filesystem::path& path);
+  /// Replaces the texture (the undo history is cleared). Throws InputError naming the file.
+  void load_texture(const std::filesystem::path& path);
+  /// The dense mesh painted on and simplified (built on first use).
+  const Mesh& dense();
+
+  // Simplify the dense mesh into `proxies` clusters.
+  const VsaResult& simplify(size_t proxies);
+  const VsaResult* simplified() const { return vsa_ ? &*vsa_ : nullptr; }
+  double simplify_ms() const { return vsa_ms_; }
+  /// Writes the simplified mesh (OBJ, PLY, OFF or GLB by extension). Throws if none yet.
+  void export_simplified(const std::filesystem::path& path) const;
+
+ private:
+  void ensure_paint();
+  void rebake();
+  void ensure_hierarchy(int max_depth);
+
+  Mesh cage_;
+  std::string name_;
+  PatchOptions options_;
+
+  // Cage.
+  std::unique_ptr<MeshDrawer> cage_drawer_;
+
+  // Fixed-depth surface.
+  int fixed_depth_ = -1;
+  PatchTable fixed_;
+  std::vector<float> fixed_points_;
+  std::unique_ptr<PatchDrawer> fixed_drawer_;
+
+  // Dynamic surface: hierarchy once per max depth, a selection per view that changes depths.
+  int hierarchy_depth_ = -1;
+  bool measured_ = false;
+  PatchHierarchy hierarchy_;
+  std::vector<float> hierarchy_points_;
+  VertexErrorModel model_;
+  std::vector<uint8_t> vdepth_;
+  PatchTable selection_;
+  std::vector<float> selection_points_;  // estimated errors: the selection's own points
+  std::unique_ptr<PatchDrawer> dynamic_drawer_;
+  float selected_tolerance_ = -1;
+  Camera selected_camera_;
+
+  // Paint.
+  std::optional<Mesh> dense_;
+  std::unique_ptr<PaintSurface> surface_;
+  std::unique_ptr<OctreeTexture> texture_;
+  PaintHistory history_;
+  std::unique_ptr<StrokePainter> painter_;
+  Mesh painted_;
+  std::unique_ptr<MeshDrawer> painted_drawer_;
+  bool stroking_ = false, painted_dirty_ = true;
+  std::vector<double> last_point_;
+
+  // Simplify.
+  std::optional<VsaResult> vsa_;
+  double vsa_ms_ = 0;
+  std::unique_ptr<MeshDrawer> clusters_drawer_, simplified_drawer_;
+};
+
+/// A colour per cluster id (RGB, 3 per entry), neighbouring ids far apart in hue.
+std::vector<float> cluster_palette(const std::vector<uint32_t>& ids);
+
+}  // namespace limn::view

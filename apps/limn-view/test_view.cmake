@@ -1,0 +1,71 @@
+# The viewer's tests (ctest view_script, view_bad_input), run with cmake -P:
+#   MODE=script: limn-view runs tests/data/view_script.json under Xvfb (a dynamic-depth surface,
+#     a paint stroke, undo/redo, .lot save and load, a simplify run and its export); its
+#     screenshots must not be blank and the stroke's colour must appear exactly where it should
+#     (painted, reloaded) and nowhere else (before, undone). Then --frames/--screenshot.
+#   MODE=bad: a missing mesh, a bad mesh and bad scripts exit 2 with one line naming the file,
+#     before any window opens.
+# Variables: VIEW, CHECK (limn-view-check), XVFB_RUN, SCRIPT, BAD_MESH, WORK_DIR.
+file(REMOVE_RECURSE ${WORK_DIR})
+file(MAKE_DIRECTORY ${WORK_DIR})
+
+function(check image)
+  execute_process(COMMAND ${CHECK} ${WORK_DIR}/${image} ${ARGN} RESULT_VARIABLE rc
+                  OUTPUT_VARIABLE out ERROR_VARIABLE out)
+  message(STATUS "${out}")
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "${image}: check failed (${ARGN})")
+  endif()
+endfunction()
+
+function(expect_input_error what)
+  execute_process(COMMAND ${VIEW} ${ARGN} WORKING_DIRECTORY ${WORK_DIR} RESULT_VARIABLE rc
+                  OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 60)
+  string(STRIP "${err}" err)
+  message(STATUS "${what}: exit ${rc}: ${err}")
+  if(NOT rc EQUAL 2)
+    message(FATAL_ERROR "${what}: expected exit code 2, got ${rc}")
+  endif()
+  if(NOT err MATCHES "^limn-view: error: [^\n]*${what}[^\n]*$")
+    message(FATAL_ERROR "${what}: expected one line naming it on stderr, got '${err}'")
+  endif()
+endfunction()
+
+if(MODE STREQUAL "script")
+  set(xvfb ${XVFB_RUN} -a -s "-screen 0 1280x1024x24")
+  execute_process(COMMAND ${xvfb} ${VIEW} --size 640x480 --samples 0 --script ${SCRIPT}
+                  WORKING_DIRECTORY ${WORK_DIR} RESULT_VARIABLE rc TIMEOUT 240)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "limn-view --script ${SCRIPT}: exit ${rc}")
+  endif()
+  check(surface.png)
+  check(before.png --absent 1,0,1)
+  check(painted.png --present 1,0,1 --min-pixels 500)
+  check(undone.png --absent 1,0,1)
+  check(reloaded.png --present 1,0,1 --min-pixels 500)
+  check(clusters.png)
+  foreach(f view.lot simplified.obj)
+    if(NOT EXISTS ${WORK_DIR}/${f})
+      message(FATAL_ERROR "the script did not write ${f}")
+    endif()
+  endforeach()
+  execute_process(COMMAND ${xvfb} ${VIEW} --shape cube --size 320x240 --samples 0 --frames 2
+                          --screenshot frames.png
+                  WORKING_DIRECTORY ${WORK_DIR} RESULT_VARIABLE rc TIMEOUT 120)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "limn-view --frames 2 --screenshot: exit ${rc}")
+  endif()
+  check(frames.png)
+elseif(MODE STREQUAL "bad")
+  expect_input_error(no-such-mesh.obj no-such-mesh.obj)
+  expect_input_error(${BAD_MESH} ${BAD_MESH})
+  file(WRITE ${WORK_DIR}/broken.json "[{\"orbit\": [1, 2]}, ")
+  expect_input_error(broken.json --script broken.json)
+  file(WRITE ${WORK_DIR}/unknown.json "[{\"orbit\": [1, 2]}, {\"fly\": true}]")
+  expect_input_error("unknown.json: action 2" --script unknown.json)
+  file(WRITE ${WORK_DIR}/stroke.json "[{\"stroke\": {\"points\": [[1, 2]], \"radius\": -3}}]")
+  expect_input_error("stroke.json: action 1" --script stroke.json)
+  expect_input_error(no-such-script.json --script no-such-script.json)
+else()
+  message(FATAL_ERROR "MODE must be script or bad")
+endif()

@@ -1,0 +1,539 @@
+#include "viewer.hpp"
+
+#include <epoxy/gl.h>
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+#include <backends/imgui_impl_glfw.h>
+#include <backends/imgui_impl_opengl3.h>
+#include <fmt/format.h>
+#include <imgui.h>
+#include <imgui_stdlib.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+#include <string>
+
+#include "limn/render/image.hpp"
+#include "orbit.hpp"
+
+namespace limn::view {
+
+namespace {
+
+std::string g_glfw_error;
+
+void on_glfw_error(int code, const char* what) {
+  g_glfw_error = fmt::format("GLFW error {}: {}", code, what ? what : "?");
+}
+
+class Viewer {
+ public:
+  Viewer(Scene& scene, const ViewerOptions& o);
+  ~Viewer();
+  Viewer(const Viewer&) = delete;
+  Viewer& operator=(const Viewer&) = delete;
+  void run();
+
+ private:
+  void frame();
+  bool script_step();  // false once the scripted run is over
+  void apply(const Action& a);
+  void panel();
+  void mouse();
+  void keys();
+  void set_mode(Mode m);
+  void screenshot(const std::filesystem::path& path);
+  void report(const std::exception& e);
+  // Runs f; interactively an error becomes the status line (the session goes on), in a script
+  // it ends the run.
+  template <class F>
+  void guard(F f) {
+    if (o_.scripted) return f();
+    try {
+      f();
+    } catch (const std::exception& e) {
+      report(e);
+      if (scene_.stroking()) scene_.end_stroke();
+    }
+  }
+  static void on_scroll(GLFWwindow* w, double dx, double dy);
+
+  Scene& scene_;
+  ViewerOptions o_;
+  GLFWwindow* window_ = nullptr;
+  bool imgui_ = false;
+  OrbitCamera orbit_;
+  int fb_w_ = 1, fb_h_ = 1;
+  double px_scale_ = 1;  // framebuffer pixels per window coordinate
+
+  Mode mode_ = Mode::view;
+  Display display_ = Display::surface;
+  SurfaceSettings surface_;
+  int max_depth_edit_ = 8, depth_edit_ = 3;  // applied on release (both rebuild tables)
+  DrawOptions draw_;
+  bool ui_ = true;
+  float background_[4] = {0.16f, 0.17f, 0.19f, 1};
+
+  Brush brush_;
+  int blend_ = 0;
+  std::string texture_path_ = "painting.lot", export_path_ = "simplified.obj";
+  int proxies_ = 50;
+  StrokeStats last_stroke_;
+
+  // Mouse drags.
+  double last_x_ = 0, last_y_ = 0;
+  int drag_button_ = -1;
+  double scroll_ = 0;
+
+  // Stats.
+  FrameStats stats_;
+  double frame_ms_ = 0, smooth_ms_ = 0;
+  std::chrono::steady_clock::time_point last_frame_ = std::chrono::steady_clock::now();
+  std::string status_;
+  bool status_error_ = false;
+  std::string renderer_;
+
+  // Scripted mode.
+  size_t next_action_ = 0, wait_frames_ = 0, frames_left_ = 0;
+  bool pending_shot_ = false;
+  std::filesystem::path shot_path_;
+};
+
+Viewer::Viewer(Scene& scene, const ViewerOptions& o) : scene_(scene), o_(o), ui_(o.ui) {
+  glfwSetErrorCallback(on_glfw_error);
+  if (!glfwInit())
+    throw std::runtime_error(fmt::format("cannot open a window (no display? {})", g_glfw_error));
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 4);
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 5);
+  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+  glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+  glfwWindowHint(GLFW_SAMPLES, std::clamp(o.samples, 0, 16));
+  const std::string title = fmt::format("limn-view - {}", scene.name());
+  window_ = glfwCreateWindow(o.width, o.height, title.c_str(), nullptr, nullptr);
+  if (!window_) {
+    glfwTerminate();
+    throw std::runtime_error(
+        fmt::format("cannot create an OpenGL 4.5 core window ({})", g_glfw_error));
+  }
+  glfwMakeContextCurrent(window_);
+  // Scripts run as fast as the driver draws; people get frames paced to the display.
+  glfwSwapInterval(o.scripted ? 0 : 1);
+  glfwSetWindowUserPointer(window_, this);
+  // Installed before ImGui's, which chains to it.
+  glfwSetScrollCallback(window_, on_scroll);
+  renderer_ = fmt::format("{}, {}", reinterpret_cast<const char*>(glGetString(GL_RENDERER)),
+                          reinterpret_cast<const char*>(glGetString(GL_VERSION)));
+
+  IMGUI_CHECKVERSION();
+  ImGui::CreateContext();
+  ImGui::GetIO().IniFilename = nullptr;  // no imgui.ini left in the working directory
+  ImGui::StyleColorsDark();
+  ImGui_ImplGlfw_InitForOpenGL(window_, true);
+  ImGui_ImplOpenGL3_Init("#version 450 core");
+  imgui_ = true;
+
+  glfwGetFramebufferSize(window_, &fb_w_, &fb_h_);
+  orbit_.frame(scene.cage(), std::max(fb_w_, 1), std::max(fb_h_, 1));
+  display_ = scene.is_cage() ? Display::surface : Display::cage;
+  max_depth_edit_ = surface_.max_depth, depth_edit_ = surface_.depth;
+  brush_.radius = 16.0f;
+  brush_.color[0] = 0.9f, brush_.color[1] = 0.35f, brush_.color[2] = 0.1f, brush_.color[3] = 1;
+  brush_.hardness = 0.6f;
+  frames_left_ = o.frames;
+}
+
+Viewer::~Viewer() {
+  if (window_) scene_.release_gl();
+  if (imgui_) {
+    ImGui_ImplOpenGL3_Shutdown();
+    ImGui_ImplGlfw_Shutdown();
+    ImGui::DestroyContext();
+  }
+  if (window_) glfwDestroyWindow(window_);
+  glfwTerminate();
+}
+
+void Viewer::on_scroll(GLFWwindow* w, double, double dy) {
+  static_cast<Viewer*>(glfwGetWindowUserPointer(w))->scroll_ += dy;
+}
+
+void Viewer::report(const std::exception& e) {
+  status_ = e.what(), status_error_ = true;
+  std::fprintf(stderr, "limn-view: %s\n", e.what());
+}
+
+void Viewer::set_mode(Mode m) {
+  if (mode_ == Mode::paint && scene_.stroking()) last_stroke_ = scene_.end_stroke();
+  mode_ = m;
+  // Each mode shows what it works on; the display can still be changed by hand.
+  if (m == Mode::paint) display_ = Display::painted;
+  if (m == Mode::simplify) display_ = scene_.simplified() ? Display::clusters : Display::painted;
+  if (m == Mode::view) display_ = scene_.is_cage() ? Display::surface : Display::cage;
+}
+
+void Viewer::apply(const Action& a) {
+  using K = Action::Kind;
+  switch (a.kind) {
+    case K::orbit:
+      orbit_.orbit(a.x, a.y);
+      break;
+    case K::pan:
+      orbit_.pan(a.x, a.y);
+      break;
+    case K::zoom:
+      orbit_.zoom(a.x);
+      break;
+    case K::frame:
+      orbit_.frame(scene_.cage(), fb_w_, fb_h_);
+      break;
+    case K::mode:
+      set_mode(a.mode);
+      break;
+    case K::display:
+      display_ = a.display;
+      break;
+    case K::surface: {
+      const SurfaceChange& c = a.surface;
+      if (c.dynamic) surface_.dynamic = *c.dynamic;
+      if (c.depth) surface_.depth = depth_edit_ = *c.depth;
+      if (c.max_depth) surface_.max_depth = max_depth_edit_ = *c.max_depth;
+      if (c.tolerance_px) surface_.tolerance_px = *c.tolerance_px;
+      if (c.tess_px) surface_.tess_px = *c.tess_px;
+      display_ = Display::surface;
+      break;
+    }
+    case K::wireframe:
+      draw_.outline = a.flag;
+      break;
+    case K::depth_colors:
+      draw_.depth_colors = a.flag;
+      break;
+    case K::ui:
+      ui_ = a.flag;
+      break;
+    case K::stroke: {
+      scene_.begin_stroke(a.brush, orbit_.camera());
+      for (size_t i = 0; i + 1 < a.points.size(); i += 2)
+        scene_.stroke_to(a.points[i], a.points[i + 1]);
+      last_stroke_ = scene_.end_stroke();
+      if (display_ != Display::painted) display_ = Display::painted;
+      break;
+    }
+    case K::undo:
+      scene_.undo();
+      break;
+    case K::redo:
+      scene_.redo();
+      break;
+    case K::save_texture:
+      scene_.save_texture(a.path);
+      break;
+    case K::load_texture:
+      scene_.load_texture(a.path);
+      break;
+    case K::simplify:
+      scene_.simplify(a.count);
+      display_ = Display::clusters;
+      break;
+    case K::export_mesh:
+      scene_.export_simplified(a.path);
+      break;
+    case K::screenshot:
+      pending_shot_ = true;
+      shot_path_ = a.path;
+      break;
+    case K::frames:
+      wait_frames_ = a.count;
+      break;
+  }
+}
+
+bool Viewer::script_step() {
+  if (wait_frames_ > 0) {
+    --wait_frames_;
+    return true;
+  }
+  if (next_action_ < o_.script.size()) {
+    apply(o_.script[next_action_++]);
+    return true;
+  }
+  if (frames_left_ > 0) {
+    --frames_left_;
+    return true;
+  }
+  if (!o_.screenshot.empty()) {
+    pending_shot_ = true;
+    shot_path_ = o_.screenshot;
+    o_.screenshot.clear();
+    return true;
+  }
+  return false;
+}
+
+void Viewer::screenshot(const std::filesystem::path& path) {
+  std::vector<uint8_t> rgba(size_t(fb_w_) * size_t(fb_h_) * 4);
+  glReadBuffer(GL_BACK);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(0, 0, fb_w_, fb_h_, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
+  // GL rows run bottom to top, PNG rows top to bottom.
+  const size_t row = size_t(fb_w_) * 4;
+  for (int y = 0; y < fb_h_ / 2; ++y)
+    std::swap_ranges(rgba.begin() + ptrdiff_t(size_t(y) * row),
+                     rgba.begin() + ptrdiff_t(size_t(y + 1) * row),
+                     rgba.begin() + ptrdiff_t(size_t(fb_h_ - 1 - y) * row));
+  for (size_t i = 3; i < rgba.size(); i += 4) rgba[i] = 255;  // the window is opaque
+  write_png(path, fb_w_, fb_h_, rgba);
+  std::fprintf(stderr, "limn-view: wrote %s (%dx%d)\n", path.string().c_str(), fb_w_, fb_h_);
+}
+
+void Viewer::mouse() {
+  ImGuiIO& io = ImGui::GetIO();
+  double x = 0, y = 0;
+  glfwGetCursorPos(window_, &x, &y);
+  x *= px_scale_, y *= px_scale_;
+  const double dx = x - last_x_, dy = y - last_y_;
+  last_x_ = x, last_y_ = y;
+  const double scroll = std::exchange(scroll_, 0.0);
+  const bool over_ui = io.WantCaptureMouse;
+  if (!over_ui && scroll != 0) orbit_.zoom(std::pow(0.9, scroll));
+
+  if (drag_button_ >= 0 && glfwGetMouseButton(window_, drag_button_) != GLFW_PRESS) {
+    if (drag_button_ == GLFW_MOUSE_BUTTON_LEFT && scene_.stroking())
+      last_stroke_ = scene_.end_stroke();
+    drag_button_ = -1;
+  }
+  if (drag_button_ < 0 && !over_ui)
+    for (int b : {GLFW_MOUSE_BUTTON_LEFT, GLFW_MOUSE_BUTTON_RIGHT, GLFW_MOUSE_BUTTON_MIDDLE})
+      if (glfwGetMouseButton(window_, b) == GLFW_PRESS) {
+        drag_button_ = b;
+        if (b == GLFW_MOUSE_BUTTON_LEFT && mode_ == Mode::paint) {
+          display_ = Display::painted;
+          scene_.begin_stroke(brush_, orbit_.camera());
+          scene_.stroke_to(x, y);
+        }
+        return;
+      }
+  if (drag_button_ < 0 || (dx == 0 && dy == 0)) return;
+  const bool shift = glfwGetKey(window_, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS ||
+                     glfwGetKey(window_, GLFW_KEY_RIGHT_SHIFT) == GLFW_PRESS;
+  // Left orbits (paints in paint mode), right orbits in paint mode and pans otherwise, middle
+  // and shift-drags pan.
+  if (drag_button_ == GLFW_MOUSE_BUTTON_LEFT && mode_ == Mode::paint) {
+    if (scene_.stroking()) scene_.stroke_to(x, y);
+  } else if (drag_button_ == GLFW_MOUSE_BUTTON_MIDDLE || shift ||
+             (drag_button_ == GLFW_MOUSE_BUTTON_RIGHT && mode_ != Mode::paint)) {
+    orbit_.pan(dx, dy);
+  } else {
+    orbit_.orbit(-0.4 * dx, 0.4 * dy);
+  }
+}
+
+void Viewer::keys() {
+  ImGuiIO& io = ImGui::GetIO();
+  if (io.WantCaptureKeyboard) return;
+  if (io.KeyCtrl && ImGui::IsKeyPressed(GLFW_KEY_Z)) {
+    io.KeyShift ? scene_.redo() : scene_.undo();
+  } else if (io.KeyCtrl && ImGui::IsKeyPressed(GLFW_KEY_Y)) {
+    scene_.redo();
+  } else if (ImGui::IsKeyPressed(GLFW_KEY_F)) {
+    orbit_.frame(scene_.cage(), fb_w_, fb_h_);
+  } else if (ImGui::IsKeyPressed(GLFW_KEY_W)) {
+    draw_.outline = !draw_.outline;
+  } else if (ImGui::IsKeyPressed(GLFW_KEY_TAB)) {
+    ui_ = !ui_;
+  }
+}
+
+void Viewer::panel() {
+  ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowSize(ImVec2(330, 0), ImGuiCond_FirstUseEver);
+  ImGui::Begin("limn-view");
+  const Mesh& cage = scene_.cage();
+  ImGui::Text("%s: %zu vertices, %zu faces", scene_.name().c_str(), cage.vertex_count(),
+              cage.face_count());
+  ImGui::TextDisabled("%s", renderer_.c_str());
+  ImGui::Text("frame %.2f ms (%.0f fps)  draw: cpu %.2f, gpu %.2f ms", smooth_ms_,
+              smooth_ms_ > 0 ? 1000.0 / smooth_ms_ : 0.0, stats_.draw.cpu_ms, stats_.draw.gpu_ms);
+  if (display_ == Display::surface)
+    ImGui::Text("patches %zu (%zu regular, %zu end caps), deepest level %d",
+                stats_.regular + stats_.gregory, stats_.regular, stats_.gregory, stats_.deepest);
+  else
+    ImGui::Text("polygons %zu", stats_.draw.patches);
+  ImGui::Text("triangles %llu, select %.2f ms",
+              static_cast<unsigned long long>(stats_.draw.triangles), stats_.select_ms);
+  ImGui::Separator();
+
+  int mode = int(mode_);
+  ImGui::RadioButton("View", &mode, int(Mode::view));
+  ImGui::SameLine();
+  ImGui::RadioButton("Paint", &mode, int(Mode::paint));
+  ImGui::SameLine();
+  ImGui::RadioButton("Simplify", &mode, int(Mode::simplify));
+  if (mode != int(mode_)) set_mode(Mode(mode));
+  int display = int(display_);
+  const char* displays[] = {"cage", "surface", "painted", "clusters", "simplified"};
+  if (ImGui::Combo("display", &display, displays, scene_.simplified() ? 5 : 3))
+    display_ = Display(display);
+  ImGui::Checkbox("wireframe (W)", &draw_.outline);
+  ImGui::SameLine();
+  ImGui::Checkbox("depth colours", &draw_.depth_colors);
+
+  if (ImGui::CollapsingHeader("Surface", ImGuiTreeNodeFlags_DefaultOpen)) {
+    if (ImGui::Checkbox("dynamic depth", &surface_.dynamic)) display_ = Display::surface;
+    if (surface_.dynamic) {
+      ImGui::SliderFloat("tolerance px", &surface_.tolerance_px, 0.1f, 10.0f, "%.2f",
+                         ImGuiSliderFlags_Logarithmic);
+      ImGui::SliderInt("max depth", &max_depth_edit_, 1, 10);
+      if (ImGui::IsItemDeactivatedAfterEdit()) surface_.max_depth = max_depth_edit_;
+    } else {
+      ImGui::SliderInt("depth", &depth_edit_, 0, 8);
+      if (ImGui::IsItemDeactivatedAfterEdit()) surface_.depth = depth_edit_;
+    }
+    ImGui::SliderFloat("px per segment", &surface_.tess_px, 2.0f, 32.0f, "%.1f");
+  }
+
+  if (ImGui::CollapsingHeader("Paint", mode_ == Mode::paint ? ImGuiTreeNodeFlags_DefaultOpen : 0)) {
+    ImGui::SliderFloat("radius px", &brush_.radius, 1.0f, 200.0f, "%.0f",
+                       ImGuiSliderFlags_Logarithmic);
+    ImGui::ColorEdit4("colour", brush_.color);
+    ImGui::SliderFloat("opacity", &brush_.opacity, 0.0f, 1.0f);
+    ImGui::SliderFloat("hardness", &brush_.hardness, 0.0f, 1.0f);
+    const char* blends[] = {"mix", "add", "multiply", "erase"};
+    if (ImGui::Combo("blend", &blend_, blends, 4)) brush_.blend = BlendMode(blend_);
+    ImGui::SliderInt("brush depth", &brush_.depth, 4, 14);
+    if (ImGui::Button("Undo")) scene_.undo();
+    ImGui::SameLine();
+    if (ImGui::Button("Redo")) scene_.redo();
+    ImGui::SameLine();
+    ImGui::Text("%zu / %zu", scene_.undo_count(), scene_.redo_count());
+    ImGui::InputText("texture", &texture_path_);
+    if (ImGui::Button("Save .lot")) {
+      try {
+        scene_.save_texture(texture_path_);
+        status_ = "saved " + texture_path_, status_error_ = false;
+      } catch (const std::exception& e) {
+        report(e);
+      }
+    }
+    ImGui::SameLine();
+    if (ImGui::Button("Load .lot")) {
+      try {
+        scene_.load_texture(texture_path_);
+        display_ = Display::painted;
+        status_ = "loaded " + texture_path_, status_error_ = false;
+      } catch (const std::exception& e) {
+        report(e);
+      }
+    }
+    if (last_stroke_.dabs)
+      ImGui::Text("last stroke: %zu dabs (%zu missed), %.1f ms", last_stroke_.dabs,
+                  last_stroke_.dabs_missed, last_stroke_.ms);
+  }
+
+  if (ImGui::CollapsingHeader("Simplify",
+                              mode_ == Mode::simplify ? ImGuiTreeNodeFlags_DefaultOpen : 0)) {
+    ImGui::InputInt("proxies K", &proxies_);
+    proxies_ = std::clamp(proxies_, 1, 100000);
+    if (ImGui::Button("Run")) {
+      try {
+        scene_.simplify(size_t(proxies_));
+        display_ = Display::clusters;
+        status_.clear();
+      } catch (const std::exception& e) {
+        report(e);
+      }
+    }
+    if (const VsaResult* r = scene_.simplified()) {
+      ImGui::SameLine();
+      ImGui::Text("%zu clusters, %zu polygons, E %.3g, %.0f ms", r->stats.clusters,
+                  r->output.mesh.face_count(), r->stats.energy, scene_.simplify_ms());
+      ImGui::InputText("output", &export_path_);
+      if (ImGui::Button("Export")) {
+        try {
+          scene_.export_simplified(export_path_);
+          status_ = "wrote " + export_path_, status_error_ = false;
+        } catch (const std::exception& e) {
+          report(e);
+        }
+      }
+    }
+  }
+  if (!status_.empty()) {
+    if (status_error_)
+      ImGui::TextColored(ImVec4(1.0f, 0.45f, 0.4f, 1.0f), "%s", status_.c_str());
+    else
+      ImGui::TextUnformatted(status_.c_str());
+  }
+  ImGui::End();
+}
+
+void Viewer::frame() {
+  glfwGetFramebufferSize(window_, &fb_w_, &fb_h_);
+  int win_w = 1, win_h = 1;
+  glfwGetWindowSize(window_, &win_w, &win_h);
+  px_scale_ = win_w > 0 ? double(fb_w_) / win_w : 1.0;
+  orbit_.resize(std::max(fb_w_, 1), std::max(fb_h_, 1));
+
+  ImGui_ImplOpenGL3_NewFrame();
+  ImGui_ImplGlfw_NewFrame();
+  ImGui::NewFrame();
+  if (ui_) panel();
+  if (!o_.scripted) {
+    guard([&] { mouse(); });
+    guard([&] { keys(); });
+    if (mode_ == Mode::paint && !ImGui::GetIO().WantCaptureMouse) {
+      // The brush's footprint follows the cursor.
+      const ImVec2 m = ImGui::GetMousePos();
+      ImGui::GetForegroundDrawList()->AddCircle(m, float(brush_.radius / px_scale_),
+                                                IM_COL32(255, 255, 255, 180), 48, 1.5f);
+    }
+  }
+  ImGui::Render();
+
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  glViewport(0, 0, fb_w_, fb_h_);
+  glClearColor(background_[0], background_[1], background_[2], background_[3]);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  if (fb_w_ > 0 && fb_h_ > 0) {
+    DrawOptions d = draw_;
+    d.pixels_per_segment = surface_.tess_px;
+    guard([&] { stats_ = scene_.draw(display_, orbit_.camera(), surface_, d); });
+  }
+  ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+  if (pending_shot_) {
+    pending_shot_ = false;
+    screenshot(shot_path_);
+  }
+  glfwSwapBuffers(window_);
+
+  const auto now = std::chrono::steady_clock::now();
+  frame_ms_ = std::chrono::duration<double, std::milli>(now - last_frame_).count();
+  last_frame_ = now;
+  smooth_ms_ = smooth_ms_ > 0 ? 0.9 * smooth_ms_ + 0.1 * frame_ms_ : frame_ms_;
+}
+
+void Viewer::run() {
+  while (!glfwWindowShouldClose(window_)) {
+    glfwPollEvents();
+    if (o_.scripted) {
+      glfwGetFramebufferSize(window_, &fb_w_, &fb_h_);
+      orbit_.resize(std::max(fb_w_, 1), std::max(fb_h_, 1));
+      if (!script_step()) break;
+      frame();
+      continue;
+    }
+    frame();
+  }
+}
+
+}  // namespace
+
+void run_viewer(Scene& scene, const ViewerOptions& options) {
+  Viewer v(scene, options);
+  v.run();
+}
+
+}  // namespace limn::view
