@@ -36,6 +36,10 @@ int main(int argc, char** argv) {
       "limn-view: view a subdivision surface with per-vertex adaptive depth, paint it without "
       "UVs, simplify it",
       "limn-view"};
+  app.footer(
+      "Mouse: left drag orbits (paints in paint mode), right drag pans (orbits in paint mode), "
+      "middle or shift drag pans, wheel zooms. Keys: Ctrl+Z undo, Ctrl+Y or Ctrl+Shift+Z redo, "
+      "F frame the model, W wireframe, Tab panel, F12 screenshot (limn-view-NNN.png).");
   app.set_version_flag("--version", std::string("limn-view ") + limn::version());
   std::string mesh, shape, size = "1280x800", script, screenshot, format;
   int samples = 4;

@@ -1,8 +1,8 @@
 # The viewer's tests (ctest view_script, view_bad_input), run with cmake -P:
 #   MODE=script: limn-view runs tests/data/view_script.json under Xvfb (a dynamic-depth surface,
-#     a paint stroke, undo/redo, .lot save and load, a simplify run and its export); its
-#     screenshots must not be blank and the stroke's colour must appear exactly where it should
-#     (painted, reloaded) and nowhere else (before, undone). Then --frames/--screenshot.
+#     fixed depth, the cage, a paint stroke, undo/redo, .lot save and load, a simplify run and
+#     its export); its screenshots must not be blank and the stroke's colour must appear where
+#     it should (painted, reloaded) and nowhere else (before, undone). Then --frames/--screenshot.
 #   MODE=bad: a missing mesh, a bad mesh and bad scripts exit 2 with one line naming the file,
 #     before any window opens.
 # Variables: VIEW, CHECK (limn-view-check), XVFB_RUN, SCRIPT, BAD_MESH, WORK_DIR.
@@ -39,6 +39,8 @@ if(MODE STREQUAL "script")
     message(FATAL_ERROR "limn-view --script ${SCRIPT}: exit ${rc}")
   endif()
   check(surface.png)
+  check(fixed.png)
+  check(cage.png)
   check(before.png --absent 1,0,1)
   check(painted.png --present 1,0,1 --min-pixels 500)
   check(undone.png --absent 1,0,1)

@@ -90,6 +90,7 @@ class Viewer {
 
   // Stats.
   FrameStats stats_;
+  double select_ms_ = 0;  // of the last view change that changed the depths
   double frame_ms_ = 0, smooth_ms_ = 0;
   std::chrono::steady_clock::time_point last_frame_ = std::chrono::steady_clock::now();
   std::string status_;
@@ -124,8 +125,7 @@ Viewer::Viewer(Scene& scene, const ViewerOptions& o) : scene_(scene), o_(o), ui_
   glfwSetWindowUserPointer(window_, this);
   // Installed before ImGui's, which chains to it.
   glfwSetScrollCallback(window_, on_scroll);
-  renderer_ = fmt::format("{}, {}", reinterpret_cast<const char*>(glGetString(GL_RENDERER)),
-                          reinterpret_cast<const char*>(glGetString(GL_VERSION)));
+  renderer_ = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
 
   IMGUI_CHECKVERSION();
   ImGui::CreateContext();
@@ -235,6 +235,7 @@ void Viewer::apply(const Action& a) {
       scene_.load_texture(a.path);
       break;
     case K::simplify:
+      proxies_ = int(a.count);
       scene_.simplify(a.count);
       display_ = Display::clusters;
       break;
@@ -338,32 +339,44 @@ void Viewer::keys() {
     io.KeyShift ? scene_.redo() : scene_.undo();
   } else if (io.KeyCtrl && ImGui::IsKeyPressed(GLFW_KEY_Y)) {
     scene_.redo();
-  } else if (ImGui::IsKeyPressed(GLFW_KEY_F)) {
+  } else if (ImGui::IsKeyPressed(GLFW_KEY_F, false)) {
     orbit_.frame(scene_.cage(), fb_w_, fb_h_);
-  } else if (ImGui::IsKeyPressed(GLFW_KEY_W)) {
+  } else if (ImGui::IsKeyPressed(GLFW_KEY_W, false)) {
     draw_.outline = !draw_.outline;
-  } else if (ImGui::IsKeyPressed(GLFW_KEY_TAB)) {
+  } else if (ImGui::IsKeyPressed(GLFW_KEY_TAB, false)) {
     ui_ = !ui_;
+  } else if (ImGui::IsKeyPressed(GLFW_KEY_F12, false)) {
+    // The next free limn-view-NNN.png in the working directory.
+    for (int i = 1; i < 100000; ++i) {
+      std::filesystem::path p = fmt::format("limn-view-{:03}.png", i);
+      std::error_code ec;
+      if (!std::filesystem::exists(p, ec)) {
+        pending_shot_ = true, shot_path_ = p;
+        status_ = "wrote " + p.string(), status_error_ = false;
+        break;
+      }
+    }
   }
 }
 
 void Viewer::panel() {
   ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
-  ImGui::SetNextWindowSize(ImVec2(330, 0), ImGuiCond_FirstUseEver);
-  ImGui::Begin("limn-view");
+  ImGui::Begin("limn-view", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
   const Mesh& cage = scene_.cage();
   ImGui::Text("%s: %zu vertices, %zu faces", scene_.name().c_str(), cage.vertex_count(),
               cage.face_count());
   ImGui::TextDisabled("%s", renderer_.c_str());
-  ImGui::Text("frame %.2f ms (%.0f fps)  draw: cpu %.2f, gpu %.2f ms", smooth_ms_,
-              smooth_ms_ > 0 ? 1000.0 / smooth_ms_ : 0.0, stats_.draw.cpu_ms, stats_.draw.gpu_ms);
-  if (display_ == Display::surface)
-    ImGui::Text("patches %zu (%zu regular, %zu end caps), deepest level %d",
-                stats_.regular + stats_.gregory, stats_.regular, stats_.gregory, stats_.deepest);
-  else
-    ImGui::Text("polygons %zu", stats_.draw.patches);
-  ImGui::Text("triangles %llu, select %.2f ms",
-              static_cast<unsigned long long>(stats_.draw.triangles), stats_.select_ms);
+  ImGui::PushItemWidth(160);
+  ImGui::Text("frame %.2f ms (%.0f fps)", smooth_ms_, smooth_ms_ > 0 ? 1000.0 / smooth_ms_ : 0.0);
+  ImGui::Text("draw: gpu %.2f ms, cpu %.2f ms", stats_.draw.gpu_ms, stats_.draw.cpu_ms);
+  const auto triangles = static_cast<unsigned long long>(stats_.draw.triangles);
+  if (display_ == Display::surface) {
+    ImGui::Text("patches %zu (%zu end caps), deepest %d", stats_.regular + stats_.gregory,
+                stats_.gregory, stats_.deepest);
+    ImGui::Text("%llu triangles, re-selection %.2f ms", triangles, select_ms_);
+  } else {
+    ImGui::Text("%zu polygons, %llu triangles", stats_.draw.patches, triangles);
+  }
   ImGui::Separator();
 
   int mode = int(mode_);
@@ -467,6 +480,7 @@ void Viewer::panel() {
     else
       ImGui::TextUnformatted(status_.c_str());
   }
+  ImGui::PopItemWidth();
   ImGui::End();
 }
 
@@ -501,6 +515,7 @@ void Viewer::frame() {
     DrawOptions d = draw_;
     d.pixels_per_segment = surface_.tess_px;
     guard([&] { stats_ = scene_.draw(display_, orbit_.camera(), surface_, d); });
+    if (stats_.reselected) select_ms_ = stats_.select_ms;
   }
   ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
   if (pending_shot_) {
