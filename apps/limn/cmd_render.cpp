@@ -3,10 +3,12 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <optional>
 #include <sstream>
 
 #include "adaptive.hpp"
 #include "common.hpp"
+#include "limn/paint/file.hpp"
 #include "limn/render/draw.hpp"
 #include "limn/render/gl_context.hpp"
 #include "limn/render/image.hpp"
@@ -16,8 +18,8 @@ namespace limn::cli {
 void add_render(CLI::App& app) {
   auto* cmd = app.add_subcommand("render", "Render a mesh or its adaptive limit surface to PNG");
   struct Opts {
-    std::string mesh, out, format, background = "1,1,1";
-    bool adaptive = false, wireframe = false, flat = false, json = false;
+    std::string mesh, out, format, background = "1,1,1", texture;
+    bool adaptive = false, wireframe = false, flat = false, nearest = false, json = false;
     int samples = 4;
     AdaptiveOpts a;
   };
@@ -42,6 +44,9 @@ void add_render(CLI::App& app) {
   cmd->add_option("--tess-px", o->a.tess_px,
                   "--adaptive: about one segment per PX pixels of cage edge (default 8)");
   cmd->add_flag("--wireframe", o->wireframe, "Outline the patches (or the mesh's polygons)");
+  cmd->add_option("--texture", o->texture,
+                  "Colour from an octree texture (.lot, limn paint) painted on this surface");
+  cmd->add_flag("--nearest", o->nearest, "--texture: nearest texel, not filtered");
   cmd->add_flag("--flat", o->flat, "Mesh: one normal per polygon (faceted), not per vertex");
   cmd->add_flag("--depth-colors", o->a.depth_colors,
                 "--adaptive: colour each patch by its refinement level");
@@ -57,6 +62,7 @@ void add_render(CLI::App& app) {
                             "--tess-px", "--depth-colors"})
         if (cmd->count(a)) throw InputError(fmt::format("{} goes with --adaptive", a));
     if (o->adaptive && o->flat) throw InputError("--flat is for meshes, not --adaptive");
+    if (o->nearest && o->texture.empty()) throw InputError("--nearest goes with --texture");
     if (o->samples < 1 || o->samples > 16)
       throw InputError(fmt::format("--samples {}: must be 1-16", o->samples));
     o->a.dynamic = cmd->count("--tolerance") > 0;
@@ -92,15 +98,21 @@ void add_render(CLI::App& app) {
 
     Stopwatch sw;
     const Mesh mesh = read_mesh(o->mesh, parse_format_option(o->format, "--format"));
+    std::optional<OctreeTexture> texture;
+    if (!o->texture.empty()) texture = load_lot(o->texture);
     nlohmann::json timings = {{"read", sw.lap()}};
     GlContext gl;
     timings["context"] = sw.lap();
+    std::optional<GpuOctreeTexture> gpu_texture;
+    if (texture) gpu_texture.emplace(*texture);
     RenderTarget target(w, h, o->samples);
     DrawOptions d;
     d.outline = o->wireframe;
     d.depth_colors = o->a.depth_colors;
     d.pixels_per_segment = pps;
     d.factor = fixed_tess ? o->a.tess : 0;
+    d.texture = gpu_texture ? &*gpu_texture : nullptr;
+    d.texture_nearest = o->nearest;
     DrawStats st;
     nlohmann::json patches = nullptr;
     Camera cam;
@@ -128,6 +140,7 @@ void add_render(CLI::App& app) {
       nlohmann::json j = {{"input", o->mesh},
                           {"output", o->out},
                           {"renderer", gl.renderer()},
+                          {"texture", texture ? nlohmann::json(o->texture) : nlohmann::json()},
                           {"resolution", {w, h}},
                           {"camera",
                            {{"eye", {cam.eye[0], cam.eye[1], cam.eye[2]}},

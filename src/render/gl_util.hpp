@@ -70,4 +70,8 @@ std::array<float, 16> view_projection(const Camera& camera, const Box& bounds);
 /// light, with an optional outline where `edge` (0 on an edge, growing inwards) is small.
 extern const char* const kShadeGlsl;
 
+/// The octree texture lookup in GLSL (octree_texture.cpp): `vec3 oct_paint(base, pos, nrm)`,
+/// a no-op unless a GpuOctreeTexture is bound to the program.
+extern const char* const kOctreeGlsl;
+
 }  // namespace limn::gl

@@ -46,7 +46,7 @@ void main() {
     vec3 d = t_bary / max(fwidth(t_bary), vec3(1e-9));
     edge = min(d.x, min(d.y, d.z));
   }
-  frag = vec4(shade(t_col, t_pos, t_nrm, eye, edge, outline), 1.0);
+  frag = vec4(shade(oct_paint(t_col, t_pos, t_nrm), t_pos, t_nrm, eye, edge, outline), 1.0);
 }
 )";
 
@@ -183,7 +183,8 @@ MeshDrawer::MeshDrawer(const Mesh& mesh, std::span<const float> face_colors, boo
     glVertexArrayAttribFormat(n, a, 3, GL_FLOAT, GL_FALSE, a * 3 * sizeof(float));
     glVertexArrayAttribBinding(n, a, 0);
   }
-  const std::string fs = std::string("#version 450 core\n") + gl::kShadeGlsl + kFragment;
+  const std::string fs =
+      std::string("#version 450 core\n") + gl::kShadeGlsl + gl::kOctreeGlsl + kFragment;
   m.program = gl::program("mesh", {{GL_VERTEX_SHADER, kVertex}, {GL_FRAGMENT_SHADER, fs}});
   glCreateQueries(GL_TIME_ELAPSED, 1, &n);
   m.time_query = gl::Query(n);
@@ -205,6 +206,10 @@ DrawStats MeshDrawer::draw(const Camera& camera, const DrawOptions& o) {
   glUniformMatrix4fv(glGetUniformLocation(prog, "view_proj"), 1, GL_FALSE, vp.data());
   glUniform3fv(glGetUniformLocation(prog, "eye"), 1, camera.eye);
   glUniform1i(glGetUniformLocation(prog, "outline"), o.outline);
+  if (o.texture)
+    o.texture->bind(prog, o.texture_nearest ? 1 : 2);
+  else
+    glUniform1i(glGetUniformLocation(prog, "oct_mode"), 0);
   glBindVertexArray(m.vao.get());
   // Without colours of its own the mesh takes the options' colour (a constant attribute).
   if (!m.has_colors) glDisableVertexArrayAttrib(m.vao.get(), 2), glVertexAttrib3fv(2, o.color);

@@ -248,6 +248,7 @@ out vec4 frag;
 void main() {
   vec3 c = base;
   if (depth_colors) c = ramp[min(info[t_patch].bits & 0xFFu, 16u)];
+  c = oct_paint(c, t_pos, t_nrm);
   float edge = 1e9;
   if (outline) {
     vec2 d = min(t_uv, 1.0 - t_uv) / max(fwidth(t_uv), vec2(1e-9));
@@ -257,8 +258,9 @@ void main() {
 }
 )";
 
-std::string with_header(int cvs, const char* a, const char* b = "", const char* c = "") {
-  return fmt::format("#version 450 core\n#define CVS {}\n{}{}{}", cvs, a, b, c);
+std::string with_header(int cvs, const char* a, const char* b = "", const char* c = "",
+                        const char* d = "") {
+  return fmt::format("#version 450 core\n#define CVS {}\n{}{}{}{}", cvs, a, b, c, d);
 }
 
 // The level-0 rate of every cage line for this view: segments per cage edge (its projected
@@ -376,7 +378,7 @@ PatchDrawer::PatchDrawer(const Mesh& cage, const PatchTable& table, std::span<co
                     tc20 = with_header(20, kInfo, kControl);
   const std::string te16 = with_header(16, kInfo, kEvalCommon, kEvalRegular);
   const std::string te20 = with_header(20, kInfo, kEvalCommon, kEvalGregory);
-  const std::string fs = with_header(16, kInfo, gl::kShadeGlsl, kFragment);
+  const std::string fs = with_header(16, kInfo, gl::kShadeGlsl, gl::kOctreeGlsl, kFragment);
   m.regular_program = gl::program("regular patches", {{GL_VERTEX_SHADER, vs16},
                                                       {GL_TESS_CONTROL_SHADER, tc16},
                                                       {GL_TESS_EVALUATION_SHADER, te16},
@@ -454,6 +456,10 @@ DrawStats PatchDrawer::draw(const Camera& camera, const DrawOptions& o) {
     glUniform1i(glGetUniformLocation(prog, "outline"), o.outline);
     glUniform1i(glGetUniformLocation(prog, "depth_colors"), o.depth_colors);
     glUniform3fv(glGetUniformLocation(prog, "ramp"), 17, ramp);
+    if (o.texture)
+      o.texture->bind(prog, o.texture_nearest ? 1 : 2);
+    else
+      glUniform1i(glGetUniformLocation(prog, "oct_mode"), 0);
     glPatchParameteri(GL_PATCH_VERTICES, cvs);
     for (size_t first = 0; first < count; first += m.chunk)
       glDrawArrays(GL_PATCHES, GLint(first * size_t(cvs)),

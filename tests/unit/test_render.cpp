@@ -6,15 +6,20 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <set>
 
 #include "limn/mesh/io.hpp"
 #include "limn/mesh/shapes.hpp"
+#include "limn/paint/brush.hpp"
+#include "limn/paint/lookup.hpp"
+#include "limn/paint/surface.hpp"
 #include "limn/render/draw.hpp"
 #include "limn/render/gl_context.hpp"
 #include "limn/render/image.hpp"
 #include "limn/subdiv/depth.hpp"
 #include "limn/subdiv/tessellate.hpp"
+#include "paint_oracle.hpp"
 
 namespace limn {
 namespace {
@@ -214,6 +219,185 @@ TEST(Render, MeshFaceColoursLandWhereTheFacesAre) {
   }
   for (size_t corner : {size_t(0), size_t(199), size_t(199 * 200), size_t(200 * 200 - 1)})
     EXPECT_EQ(px[4 * corner] + px[4 * corner + 1] + px[4 * corner + 2], 0);
+}
+
+// An octree texture painted with dabs of every blend mode at several depths (bricks, general
+// nodes, two-sided cells), over a sphere and two sheets a fraction of a leaf apart facing
+// opposite ways.
+struct PaintedCase {
+  Mesh mesh;
+  OctreeTexture texture;
+};
+
+PaintedCase painted_case(std::mt19937& rng) {
+  PaintedCase c;
+  // Sheet A faces up at z = 1.8003, sheet B faces down at z = 1.8 (0.3 of a depth-11 leaf below,
+  // in the same leaf cells at depths 9-11), far enough above the sphere to be painted from below.
+  c.mesh =
+      test::merge({test::uv_sphere(1.0, 12, 24), test::sheet(-0.3, 0.3, -0.3, 0.3, 1.8003, 4, true),
+                   test::sheet(-0.3, 0.3, -0.3, 0.3, 1.8, 4, false)});
+  const PaintSurface s(c.mesh);
+  c.texture = OctreeTexture::create(s, pack_rgba8(240, 240, 240, 255));
+  std::uniform_real_distribution<double> u01(0, 1);
+  auto dab = [&](const Brush& b, const float p[3]) {
+    StrokePainter sp(c.texture, s);
+    sp.begin(b);
+    sp.dab_world(p);
+    sp.end();
+  };
+  // The sphere: dabs of every blend mode at depths 5-11.
+  const int depths[] = {5, 7, 9, 10, 11};
+  for (int i = 0; i < 40; ++i) {
+    Brush b;
+    b.depth = depths[i % 5];
+    b.radius = float(0.15 + 0.2 * u01(rng));
+    for (float& x : b.color) x = float(u01(rng));
+    b.color[3] = float(0.5 + 0.5 * u01(rng));
+    b.hardness = float(u01(rng));
+    b.opacity = float(0.5 + 0.5 * u01(rng));
+    b.blend = BlendMode(i % 4);
+    const double th = std::acos(2 * u01(rng) - 1), ph = 6.283185307 * u01(rng);
+    const float p[3] = {float(std::sin(th) * std::cos(ph)), float(std::sin(th) * std::sin(ph)),
+                        float(std::cos(th))};
+    dab(b, p);
+  }
+  // The sheets, each from its own side in its own colour, at brick depths: two-sided cells.
+  for (int i = 0; i < 6; ++i) {
+    Brush b;
+    b.depth = 9 + i % 3;
+    b.radius = 0.25f;
+    b.hardness = 1;
+    for (int k = 0; k < 3; ++k) b.color[k] = float(u01(rng));
+    const float p[3] = {float(0.2 * u01(rng) - 0.1), float(0.2 * u01(rng) - 0.1),
+                        i % 2 ? 1.8f : 1.8003f};
+    dab(b, p);
+  }
+  return c;
+}
+
+// The fragment shaders' lookup (run as a compute shader over the same GLSL) against
+// OctreeSampler: the same nearest colour and found flag at every point, and the same filtered
+// colour at leaf level and through the mip averages, on and off the surface, from both sides.
+TEST(Render, GpuOctreeLookupEqualsCpu) {
+  context();
+  std::mt19937 rng(7);
+  const PaintedCase c = painted_case(rng);
+  ASSERT_EQ(c.texture.check(), "");
+  ASSERT_GT(c.texture.stats().double_cells, 0u);
+  const auto tris = test::triangles(c.mesh);
+  std::uniform_real_distribution<double> u01(0, 1);
+  std::vector<float> p, n;
+  for (int i = 0; i < 6000; ++i) {
+    // Half the points on the sheets' triangles (the last ones), half anywhere.
+    const size_t first = i % 2 ? tris.size() - 64 : 0;
+    const test::Tri& tri =
+        tris[first + size_t(u01(rng) * double(tris.size() - first)) % (tris.size() - first)];
+    test::P3 q = test::point_in(tri, u01(rng), u01(rng));
+    test::P3 nn = tri.n;
+    if (i % 3 == 1) nn = {-nn[0], -nn[1], -nn[2]};  // the other side
+    if (i % 5 == 4)  // off the surface, anywhere in (and a little beyond) the cube
+      for (int k = 0; k < 3; ++k)
+        q[k] = c.texture.origin()[k] + c.texture.size() * (1.1 * u01(rng) - 0.05);
+    for (int k = 0; k < 3; ++k) p.push_back(float(q[size_t(k)])), n.push_back(float(nn[size_t(k)]));
+  }
+  OctreeSampler cpu(c.texture);
+  GpuOctreeTexture gpu(c.texture);
+  size_t found = 0, mip = 0, painted = 0, back = 0;
+  for (float footprint : {0.0f, 0.013f, 0.07f}) {
+    const GpuOctreeTexture::Lookups g = gpu.lookup(p, n, footprint);
+    for (size_t i = 0; i < p.size() / 3; ++i) {
+      Rgba8 col;
+      const bool nf = cpu.nearest(&p[3 * i], &n[3 * i], col);
+      ASSERT_EQ(bool(g.nearest_found[i]), nf) << i;
+      ASSERT_EQ(g.nearest[i], col) << i;
+      float rgba[4];
+      const bool ff = cpu.filtered(&p[3 * i], &n[3 * i], footprint, rgba);
+      ASSERT_EQ(bool(g.filtered_found[i]), ff) << i << " footprint " << footprint;
+      for (int k = 0; k < 4; ++k)
+        ASSERT_NEAR(g.filtered[4 * i + size_t(k)], rgba[k], 2e-3f)
+            << i << " channel " << k << " footprint " << footprint;
+      found += nf;
+      mip += ff && footprint > 0;
+      if (footprint == 0 && nf && col != c.texture.background()) {
+        ++painted;
+        Rgba8 other;
+        const float flip[3] = {-n[3 * i], -n[3 * i + 1], -n[3 * i + 2]};
+        back +=
+            cpu.nearest(&p[3 * i], flip, other) && other != col && other != c.texture.background();
+      }
+    }
+  }
+  EXPECT_GT(found, 6000u);
+  EXPECT_GT(painted, 1000u);
+  EXPECT_GT(back, 200u);  // two-sided cells, each side painted its own colour
+  EXPECT_GT(mip, 3000u);
+  // After more paint, an update sends only the changed words and lookups follow.
+  OctreeTexture t2 = c.texture;
+  {
+    const PaintSurface s(c.mesh);
+    Brush b;
+    b.depth = 8, b.radius = 0.2f, b.color[0] = 0, b.color[1] = 1, b.color[2] = 0;
+    StrokePainter sp(t2, s);
+    sp.begin(b);
+    const float at[3] = {0, 0, 1};
+    sp.dab_world(at);
+    sp.end();
+  }
+  gpu.update(t2);
+  EXPECT_LE(gpu.last_upload_words(), t2.words().size());
+  OctreeSampler cpu2(t2);
+  const GpuOctreeTexture::Lookups g2 = gpu.lookup(p, n, 0.0f);
+  for (size_t i = 0; i < p.size() / 3; ++i) {
+    Rgba8 col;
+    cpu2.nearest(&p[3 * i], &n[3 * i], col);
+    ASSERT_EQ(g2.nearest[i], col) << i;
+  }
+}
+
+// A red dab on the sphere's side facing the camera shows red in the image where the dab's
+// centre projects, the rest of the sphere its painted background, on a mesh and on the
+// subdivision surface of a cage.
+TEST(Render, PaintedColoursAppearWhereTheStrokesWere) {
+  context();
+  const Mesh sphere = test::uv_sphere(1.0, 24, 48);
+  const PaintSurface s(sphere);
+  OctreeTexture t = OctreeTexture::create(s, pack_rgba8(255, 255, 255, 255));
+  Camera cam;
+  cam.eye[0] = 0, cam.eye[1] = 0, cam.eye[2] = 4;
+  cam.width = cam.height = 200;
+  cam.fovy_deg = 40;
+  const float dab[3] = {0.5f, 0.3f, std::sqrt(1.0f - 0.25f - 0.09f)};
+  Brush b;
+  b.depth = 9, b.radius = 0.15f, b.hardness = 1;
+  b.color[0] = 1, b.color[1] = 0, b.color[2] = 0, b.color[3] = 1;
+  StrokePainter sp(t, s);
+  sp.begin(b);
+  sp.dab_world(dab);
+  sp.end();
+  GpuOctreeTexture gpu(t);
+  MeshDrawer drawer(sphere);
+  RenderTarget target(200, 200, 1);
+  const float black[4] = {0, 0, 0, 1};
+  for (bool nearest : {false, true}) {
+    target.begin(black);
+    DrawOptions o;
+    o.texture = &gpu;
+    o.texture_nearest = nearest;
+    drawer.draw(cam, o);
+    const std::vector<uint8_t> px = target.read_rgba();
+    double x, y;
+    ASSERT_TRUE(cam.project(dab, x, y));
+    const uint8_t* at = &px[4 * (size_t(y) * 200 + size_t(x))];
+    EXPECT_GT(at[0], 100) << nearest;
+    EXPECT_LT(at[1], 30) << nearest;
+    EXPECT_LT(at[2], 30) << nearest;
+    // The opposite side of the visible disc: white, shaded (grey), not red.
+    const float other[3] = {-0.5f, -0.3f, dab[2]};
+    ASSERT_TRUE(cam.project(other, x, y));
+    const uint8_t* o2 = &px[4 * (size_t(y) * 200 + size_t(x))];
+    EXPECT_GT(o2[1], 100) << nearest;
+    EXPECT_LT(std::abs(int(o2[0]) - int(o2[1])), 8) << nearest;
+  }
 }
 
 TEST(Render, PngRoundTripsAndFailsCleanly) {

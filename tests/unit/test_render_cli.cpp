@@ -10,6 +10,7 @@
 #include "cli_runner.hpp"
 #include "limn/mesh/io.hpp"
 #include "limn/render/image.hpp"
+#include "limn/subdiv/depth.hpp"
 
 namespace limn {
 namespace {
@@ -61,6 +62,55 @@ TEST_F(RenderCli, MeshToPng) {
   ASSERT_EQ(r.code, 0) << r.err;
   int w = 0, h = 0;
   EXPECT_GT(drawn(png, w, h), size_t(w * h) / 20);
+}
+
+// Paint a red disc on the cube's front face, render the cube with the texture: red in the
+// middle of the image (where the default camera sees that face), not at the face's corner.
+TEST_F(RenderCli, PaintedTextureToPng) {
+  const fs::path cube = dir() / "cube.obj", lot = dir() / "cube.lot", png = dir() / "cube.png";
+  ASSERT_EQ(limn("shape cube -o " + q(cube)).code, 0);
+  write_file_atomic(dir() / "s.json",
+                    R"({"strokes": [{"points": [[0, 0, 0.5]], "radius": 0.2, "color": [1, 0, 0, 1],
+                    "hardness": 1, "space": "world"}]})");
+  const test::CliResult p =
+      limn(fmt::format("paint {} --strokes {} -o {} --depth 8 --background 1,1,1,1", q(cube),
+                       q(dir() / "s.json"), q(lot)));
+  ASSERT_EQ(p.code, 0) << p.err;
+  for (const char* mode : {"", "--nearest"}) {
+    const test::CliResult r =
+        limn(fmt::format("render {} --texture {} {} --flat --resolution 200x200 --json -o {}",
+                         q(cube), q(lot), mode, q(png)));
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(nlohmann::json::parse(r.out)["texture"], lot.string());
+    int w = 0, h = 0;
+    const std::vector<uint8_t> px = read_png(png, w, h);
+    // Around where the default camera sees the disc's centre.
+    const Camera cam = frame_camera(read_mesh(cube), w, h);
+    const float centre[3] = {0, 0, 0.5f};
+    double cx = 0, cy = 0;
+    ASSERT_TRUE(cam.project(centre, cx, cy));
+    size_t red = 0;
+    for (int y = int(cy) - 10; y < int(cy) + 10; ++y)
+      for (int x = int(cx) - 10; x < int(cx) + 10; ++x) {
+        const uint8_t* c = &px[4 * size_t(y * w + x)];
+        red += c[0] > 100 && c[1] < 40 && c[2] < 40;
+      }
+    // The face's corner is white (shaded).
+    const float corner[3] = {0.45f, -0.45f, 0.5f};
+    ASSERT_TRUE(cam.project(corner, cx, cy));
+    const uint8_t* c = &px[4 * size_t(int(cy) * w + int(cx))];
+    EXPECT_GT(c[1], 100) << mode;
+    EXPECT_EQ(red, 400u) << mode;
+  }
+  // A texture file that is not one: exit 2 naming it, no image.
+  fs::remove(png);
+  write_file_atomic(dir() / "bad.lot", "not a texture");
+  const test::CliResult b =
+      limn(fmt::format("render {} --texture {} -o {}", q(cube), q(dir() / "bad.lot"), q(png)));
+  EXPECT_EQ(b.code, 2);
+  EXPECT_THAT(b.err, HasSubstr("bad.lot"));
+  EXPECT_FALSE(fs::exists(png));
+  EXPECT_EQ(limn(fmt::format("render {} --nearest -o {}", q(cube), q(png))).code, 2);
 }
 
 TEST_F(RenderCli, BadInputAndUsageExitTwoWithoutAnImage) {

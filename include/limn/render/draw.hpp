@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "limn/mesh/mesh.hpp"
+#include "limn/render/texture.hpp"
 #include "limn/subdiv/depth.hpp"
 #include "limn/subdiv/patches.hpp"
 
@@ -29,6 +30,10 @@ struct DrawOptions {
   /// are powers of two, 1-32 per patch edge). Ignored when `factor` > 0.
   float pixels_per_segment = 8.0f;
   int factor = 0;  ///< patches: this many segments per patch edge (1-32); 0: screen-space rates
+  /// Colour from an octree texture (limn paint) looked up at each fragment's position and
+  /// normal, over the base or depth colour; null: none.
+  const GpuOctreeTexture* texture = nullptr;
+  bool texture_nearest = false;  ///< nearest texel, not filtered (trilinear + mip by footprint)
 };
 
 /// What a draw did. GPU time is measured with a timer query (0 when the driver has none).

@@ -1,0 +1,462 @@
+// The octree texture on the GPU: the pool in a storage buffer and OctreeSampler's walk in GLSL
+// (kOctreeGlsl, shared by the drawers' fragment shaders and the lookup compute shader).
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cstring>
+#include <stdexcept>
+
+#include "gl_util.hpp"
+#include "limn/render/texture.hpp"
+
+namespace limn {
+
+namespace gl {
+
+// Line for line the walks of src/paint/octree_lookup.cpp (nearest, cell_value, filtered); 64-bit
+// brick masks as two words. Coordinates in double, as there, so both pick the same cells.
+const char* const kOctreeGlsl = R"(
+layout(std430, binding = 5) readonly buffer OctreePool { uint pool[]; };
+uniform dvec3 oct_origin;
+uniform double oct_scale;  // 65536 / size
+uniform float oct_size;
+uniform uint oct_background;
+uniform int oct_mode;  // 0: no texture, 1: nearest, 2: filtered
+uniform vec3 oct_tags[15];
+
+const int kD = 16;
+const uint kFlag = 0x80000000u;
+
+uint oct_octant(uvec3 c, int shift) {
+  return ((c.x >> shift) & 1u) | ((c.y >> shift) & 1u) << 1 | ((c.z >> shift) & 1u) << 2;
+}
+int oct_side(uint tag, vec3 n) {
+  if (tag == 0u) return 0;
+  vec3 d = oct_tags[tag];
+  return d.x * n.x + d.y * n.y + d.z * n.z >= 0.0 ? 0 : 1;
+}
+bool oct_bit64(uvec2 m, int k) {
+  return k < 32 ? ((m.x >> k) & 1u) != 0u : ((m.y >> (k - 32)) & 1u) != 0u;
+}
+uint oct_below64(uvec2 m, int k) {
+  if (k < 32) return uint(bitCount(m.x & ((1u << k) - 1u)));
+  return uint(bitCount(m.x)) + uint(bitCount(m.y & ((1u << (k - 32)) - 1u)));
+}
+vec4 oct_unpack(uint c) {
+  return vec4(float(c & 255u), float((c >> 8) & 255u), float((c >> 16) & 255u),
+              float(c >> 24)) / 255.0;
+}
+
+bool oct_brick_leaf(uint word, int level, uvec3 c, vec3 n, out uint col) {
+  col = oct_background;
+  uint bp = word & ~kFlag;
+  uvec2 mask = uvec2(pool[bp], pool[bp + 1u]);
+  int m = int(oct_octant(c, kD - 1 - level) * 8u + oct_octant(c, kD - 2 - level));
+  if (!oct_bit64(mask, m)) return false;
+  uvec2 dbl = uvec2(0u);
+  uint base = bp + 3u;
+  if ((word & kFlag) != 0u) {
+    dbl = uvec2(pool[bp + 2u], pool[bp + 3u]);
+    base = bp + 5u;
+  }
+  uint r = oct_below64(mask, m);
+  uint si = r + oct_below64(dbl, m);
+  uint tag = (pool[base + r / 8u] >> (4u * (r % 8u))) & 15u;
+  int side = oct_side(tag, n);
+  if (side != 0 && !oct_bit64(dbl, m)) return false;
+  uint count = uint(bitCount(mask.x)) + uint(bitCount(mask.y));
+  col = pool[base + (count + 7u) / 8u + si + uint(side)];
+  return true;
+}
+
+// OctreeSampler::nearest_at: the leaf holding c (level-16 coordinates), its sample facing n.
+bool oct_nearest_at(uvec3 c, vec3 n, out uint col, out int level) {
+  col = oct_background;
+  level = 0;
+  uint ptr = pool[0], info = pool[1];
+  for (int l = 0; l < kD; ++l) {
+    uint bit = 1u << oct_octant(c, kD - 1 - l);
+    level = l + 1;
+    if ((info & bit) == 0u) return false;
+    uint below = bit - 1u;
+    uint lf = (info >> 8) & 255u, br = (info >> 16) & 255u, dbl = info >> 24;
+    uint gen = info & 255u & ~lf & ~br;
+    if ((gen & bit) != 0u) {
+      uint i = ptr + 2u * uint(bitCount(gen & below));
+      ptr = pool[i];
+      info = pool[i + 1u];
+      continue;
+    }
+    uint after_gen = ptr + 2u * uint(bitCount(gen));
+    if ((br & bit) != 0u) {
+      uint w = pool[after_gen + uint(bitCount(br & below))];
+      level = l + 3;
+      return oct_brick_leaf(w, l + 1, c, n, col);
+    }
+    uint base = after_gen + uint(bitCount(br)) + 1u;
+    uint r = uint(bitCount(lf & below));
+    uint si = r + uint(bitCount(dbl & below));
+    uint tag = (pool[base + r / 8u] >> (4u * (r % 8u))) & 15u;
+    int side = oct_side(tag, n);
+    if (side != 0 && (dbl & bit) == 0u) return false;
+    col = pool[base + (uint(bitCount(lf)) + 7u) / 8u + si + uint(side)];
+    return true;
+  }
+  return false;
+}
+
+// Premultiplied mean of a short run of samples, rounded as the CPU does.
+uint oct_premul_mean(uint v[8], uint k) {
+  double r = 0.0, g = 0.0, b = 0.0, a = 0.0;
+  for (uint i = 0u; i < k; ++i) {
+    uint s = v[i];
+    double al = double(s >> 24);
+    r += double(s & 255u) * al;
+    g += double((s >> 8) & 255u) * al;
+    b += double((s >> 16) & 255u) * al;
+    a += al;
+  }
+  if (a <= 0.0) return 0u;
+  uint qr = uint(clamp(floor(r / a + 0.5), 0.0, 255.0));
+  uint qg = uint(clamp(floor(g / a + 0.5), 0.0, 255.0));
+  uint qb = uint(clamp(floor(b / a + 0.5), 0.0, 255.0));
+  uint qa = uint(clamp(floor(a / double(k) + 0.5), 0.0, 255.0));
+  return qr | qg << 8 | qb << 16 | qa << 24;
+}
+uint oct_mean2(uint s0, uint s1) {
+  uint v[8];
+  v[0] = s0;
+  v[1] = s1;
+  return oct_premul_mean(v, 2u);
+}
+
+// OctreeSampler::cell_value: the leaf at or above `level` holding c, or the node average there.
+bool oct_cell_value(uvec3 c, int level, vec3 n, out uint col) {
+  col = oct_background;
+  uint ptr = pool[0], info = pool[1];
+  if (level == 0) {
+    if ((info & 255u) == 0u) return false;
+    uint gen0 = info & 255u & ~((info >> 8) & 255u) & ~((info >> 16) & 255u);
+    col = pool[ptr + 2u * uint(bitCount(gen0)) + uint(bitCount((info >> 16) & 255u))];
+    return true;
+  }
+  for (int l = 0; l < kD; ++l) {
+    uint bit = 1u << oct_octant(c, kD - 1 - l);
+    if ((info & bit) == 0u) return false;
+    uint below = bit - 1u;
+    uint lf = (info >> 8) & 255u, br = (info >> 16) & 255u, dbl = info >> 24;
+    uint gen = info & 255u & ~lf & ~br;
+    uint after_gen = ptr + 2u * uint(bitCount(gen));
+    if ((gen & bit) != 0u) {
+      uint i = ptr + 2u * uint(bitCount(gen & below));
+      ptr = pool[i];
+      info = pool[i + 1u];
+      if (l + 1 == level) {
+        uint g2 = info & 255u & ~((info >> 8) & 255u) & ~((info >> 16) & 255u);
+        col = pool[ptr + 2u * uint(bitCount(g2)) + uint(bitCount((info >> 16) & 255u))];
+        return true;
+      }
+      continue;
+    }
+    if ((br & bit) != 0u) {
+      uint w = pool[after_gen + uint(bitCount(br & below))];
+      uint bp = w & ~kFlag, hdr = (w & kFlag) != 0u ? 4u : 2u;
+      if (l + 1 == level) {
+        col = pool[bp + hdr];
+        return true;
+      }
+      if (l + 2 == level) {
+        uvec2 mask = uvec2(pool[bp], pool[bp + 1u]);
+        uvec2 dm = (w & kFlag) != 0u ? uvec2(pool[bp + 2u], pool[bp + 3u]) : uvec2(0u);
+        int c1 = int(oct_octant(c, kD - 2 - l));
+        uint byte = c1 < 4 ? (mask.x >> (8 * c1)) & 255u : (mask.y >> (8 * (c1 - 4))) & 255u;
+        if (byte == 0u) return false;
+        uint count = uint(bitCount(mask.x)) + uint(bitCount(mask.y));
+        uint at = bp + hdr + 1u + (count + 7u) / 8u + oct_below64(mask, 8 * c1) +
+                  oct_below64(dm, 8 * c1);
+        uint cells[8];
+        uint k = 0u;
+        for (int c2 = 0; c2 < 8; ++c2) {
+          int m = 8 * c1 + c2;
+          if (!oct_bit64(mask, m)) continue;
+          bool two = oct_bit64(dm, m);
+          cells[k++] = two ? oct_mean2(pool[at], pool[at + 1u]) : pool[at];
+          at += two ? 2u : 1u;
+        }
+        col = oct_premul_mean(cells, k);
+        return true;
+      }
+      return oct_brick_leaf(w, l + 1, c, n, col);
+    }
+    uint base = after_gen + uint(bitCount(br)) + 1u;
+    uint r = uint(bitCount(lf & below));
+    uint si = r + uint(bitCount(dbl & below));
+    uint tag = (pool[base + r / 8u] >> (4u * (r % 8u))) & 15u;
+    int side = oct_side(tag, n);
+    if (side != 0 && (dbl & bit) == 0u) return false;
+    col = pool[base + (uint(bitCount(lf)) + 7u) / 8u + si + uint(side)];
+    return true;
+  }
+  return false;
+}
+
+// The 8 taps around u at `level`: acc = premultiplied rgb, alpha; weight in acc_w.
+bool oct_trilinear(dvec3 u, int level, vec3 n, bool averages, inout vec4 acc, inout float acc_w) {
+  double cells = double(1u << level);
+  dvec3 g = u * cells - 0.5;
+  dvec3 f = floor(g);
+  ivec3 i0 = ivec3(f);
+  dvec3 t = g - f;
+  int hi = 1 << level;
+  int shift = kD - level;
+  uint half_cell = shift > 0 ? 1u << (shift - 1) : 0u;
+  bool hit = false;
+  for (int corner = 0; corner < 8; ++corner) {
+    ivec3 ic;
+    double w = 1.0;
+    for (int k = 0; k < 3; ++k) {
+      int d = (corner >> k) & 1;
+      ic[k] = i0[k] + d;
+      w *= d != 0 ? t[k] : 1.0 - t[k];
+    }
+    if (w <= 0.0) continue;
+    if (any(lessThan(ic, ivec3(0))) || any(greaterThanEqual(ic, ivec3(hi)))) continue;
+    uvec3 x = (uvec3(ic) << uint(shift)) + half_cell;
+    uint c;
+    int lv;
+    bool found = averages ? oct_cell_value(x, level, n, c) : oct_nearest_at(x, n, c, lv);
+    if (!found) continue;
+    float a = float(c >> 24) / 255.0, fw = float(w);
+    acc.r += fw * a * float(c & 255u) / 255.0;
+    acc.g += fw * a * float((c >> 8) & 255u) / 255.0;
+    acc.b += fw * a * float((c >> 16) & 255u) / 255.0;
+    acc.a += fw * a;
+    acc_w += fw;
+    hit = true;
+  }
+  return hit;
+}
+
+bool oct_cell(vec3 p, out uvec3 c, out dvec3 u) {
+  dvec3 s = (dvec3(p) - oct_origin) * oct_scale;
+  u = s / 65536.0;
+  c = uvec3(0u);
+  if (!(all(greaterThanEqual(s, dvec3(0.0))) && all(lessThan(s, dvec3(65536.0))))) return false;
+  c = uvec3(s);
+  return true;
+}
+
+// OctreeSampler::nearest.
+bool oct_nearest(vec3 p, vec3 n, out uint col, out int level) {
+  uvec3 c;
+  dvec3 u;
+  col = oct_background;
+  level = 0;
+  if (!oct_cell(p, c, u)) return false;
+  return oct_nearest_at(c, n, col, level);
+}
+
+// OctreeSampler::filtered: straight rgba.
+bool oct_filtered(vec3 p, vec3 n, float footprint, out vec4 rgba) {
+  rgba = vec4(0.0);
+  uvec3 c;
+  dvec3 u;
+  if (!oct_cell(p, c, u)) return false;
+  uint col;
+  int leaf_level;
+  oct_nearest_at(c, n, col, leaf_level);
+  vec4 acc = vec4(0.0);
+  float acc_w = 0.0;
+  bool hit;
+  double leaf_size = double(oct_size) / double(1u << leaf_level);
+  if (!(double(footprint) > leaf_size) || isinf(footprint) || isnan(footprint)) {
+    hit = oct_trilinear(u, leaf_level, n, false, acc, acc_w);
+  } else {
+    float lf = clamp(log2(oct_size / footprint), 0.0, float(leaf_level));
+    int l0 = int(floor(lf));
+    float frac = lf - float(l0);
+    vec4 a0 = vec4(0.0), a1 = vec4(0.0);
+    float w0s = 0.0, w1s = 0.0;
+    bool h0 = oct_trilinear(u, l0, n, true, a0, w0s);
+    bool h1 = frac > 0.0 && l0 + 1 <= leaf_level &&
+              oct_trilinear(u, l0 + 1, n, l0 + 1 < leaf_level, a1, w1s);
+    hit = h0 || h1;
+    vec4 v0 = w0s > 0.0 ? a0 / w0s : vec4(0.0), v1 = w1s > 0.0 ? a1 / w1s : vec4(0.0);
+    float w0 = h0 ? 1.0 - frac : 0.0, w1 = h1 ? frac : 0.0;
+    acc = w0 * v0 + w1 * v1;
+    acc_w = w0 + w1;
+  }
+  if (!hit || !(acc_w > 0.0)) return false;
+  float alpha = acc.a / acc_w;
+  if (acc.a > 0.0) rgba.rgb = clamp(acc.rgb / acc.a, 0.0, 1.0);
+  rgba.a = clamp(alpha, 0.0, 1.0);
+  return true;
+}
+
+#ifndef OCT_LOOKUP_ONLY
+// A fragment's colour: the texture at its position and normal over `base`, a one-pixel footprint.
+vec3 oct_paint(vec3 base, vec3 pos, vec3 nrm) {
+  if (oct_mode == 0) return base;
+  float footprint = max(length(dFdx(pos)), length(dFdy(pos)));
+  vec4 c = oct_unpack(oct_background);
+  if (oct_mode == 1) {
+    uint col;
+    int lv;
+    if (oct_nearest(pos, nrm, col, lv)) c = oct_unpack(col);
+  } else {
+    vec4 f;
+    if (oct_filtered(pos, nrm, footprint, f)) c = f;
+  }
+  return mix(base, c.rgb, c.a);
+}
+#endif
+)";
+
+}  // namespace gl
+
+namespace {
+
+constexpr const char* kLookup = R"(
+layout(local_size_x = 64) in;
+layout(std430, binding = 6) readonly buffer Points { float pts[]; };
+layout(std430, binding = 7) readonly buffer Normals { float nrms[]; };
+layout(std430, binding = 8) writeonly buffer Out { uint res[]; };
+uniform uint count;
+uniform bool has_normals;
+uniform float footprint;
+void main() {
+  uint i = gl_GlobalInvocationID.x;
+  if (i >= count) return;
+  vec3 p = vec3(pts[3u * i], pts[3u * i + 1u], pts[3u * i + 2u]);
+  vec3 n = has_normals ? vec3(nrms[3u * i], nrms[3u * i + 1u], nrms[3u * i + 2u]) : vec3(0.0);
+  uint col;
+  int lv;
+  bool nf = oct_nearest(p, n, col, lv);
+  vec4 f;
+  bool ff = oct_filtered(p, n, footprint, f);
+  res[6u * i] = col;
+  res[6u * i + 1u] = (nf ? 1u : 0u) | (ff ? 2u : 0u);
+  res[6u * i + 2u] = floatBitsToUint(f.r);
+  res[6u * i + 3u] = floatBitsToUint(f.g);
+  res[6u * i + 4u] = floatBitsToUint(f.b);
+  res[6u * i + 5u] = floatBitsToUint(f.a);
+}
+)";
+
+}  // namespace
+
+struct GpuOctreeTexture::Impl {
+  gl::Buffer pool;
+  size_t capacity = 0;
+  std::vector<uint32_t> shadow;  // what the GPU holds, to send only what changed
+  size_t last_words = 0;
+  double origin[3] = {0, 0, 0}, scale = 1;
+  float size = 1;
+  uint32_t background = 0;
+  float tags[15 * 3] = {};
+  mutable gl::Program lookup;
+};
+
+GpuOctreeTexture::GpuOctreeTexture(const OctreeTexture& t) : impl_(std::make_unique<Impl>()) {
+  for (int k = 0; k <= octree::kTagCount; ++k) {
+    const auto d = octree::tag_direction(k);
+    for (int j = 0; j < 3; ++j) impl_->tags[3 * k + j] = d[size_t(j)];
+  }
+  update(t);
+}
+
+GpuOctreeTexture::~GpuOctreeTexture() = default;
+
+void GpuOctreeTexture::update(const OctreeTexture& t) {
+  Impl& m = *impl_;
+  for (int k = 0; k < 3; ++k) m.origin[k] = t.origin()[k];
+  m.size = t.size();
+  m.scale = double(1u << octree::kMaxDepth) / double(t.size());
+  m.background = t.background();
+  const auto words = t.words();
+  GLint64 max_bytes = 0;
+  glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_bytes);
+  if (GLint64(words.size_bytes()) > max_bytes)
+    throw std::runtime_error(fmt::format(
+        "OpenGL: the octree texture's pool ({} MB) exceeds the driver's largest storage buffer "
+        "({} MB)",
+        words.size_bytes() >> 20, max_bytes >> 20));
+  if (words.size() != m.shadow.size() || !m.pool.get()) {
+    gl::upload(m.pool, m.capacity, words.data(), words.size_bytes());
+    m.last_words = words.size();
+  } else {
+    size_t lo = 0, hi = words.size();
+    while (lo < hi && words[lo] == m.shadow[lo]) ++lo;
+    while (hi > lo && words[hi - 1] == m.shadow[hi - 1]) --hi;
+    if (hi > lo)
+      glNamedBufferSubData(m.pool.get(), GLintptr(lo * 4), GLsizeiptr((hi - lo) * 4),
+                           words.data() + lo);
+    m.last_words = hi - lo;
+  }
+  m.shadow.assign(words.begin(), words.end());
+  gl::check("GpuOctreeTexture::update");
+}
+
+size_t GpuOctreeTexture::last_upload_words() const {
+  return impl_->last_words;
+}
+
+void GpuOctreeTexture::bind(unsigned program, int mode) const {
+  const Impl& m = *impl_;
+  const GLuint prog = program;
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, m.pool.get());
+  glUniform3d(glGetUniformLocation(prog, "oct_origin"), m.origin[0], m.origin[1], m.origin[2]);
+  glUniform1d(glGetUniformLocation(prog, "oct_scale"), m.scale);
+  glUniform1f(glGetUniformLocation(prog, "oct_size"), m.size);
+  glUniform1ui(glGetUniformLocation(prog, "oct_background"), m.background);
+  glUniform1i(glGetUniformLocation(prog, "oct_mode"), mode);
+  glUniform3fv(glGetUniformLocation(prog, "oct_tags"), 15, m.tags);
+}
+
+GpuOctreeTexture::Lookups GpuOctreeTexture::lookup(std::span<const float> p,
+                                                   std::span<const float> n,
+                                                   float footprint) const {
+  const Impl& m = *impl_;
+  const size_t count = p.size() / 3;
+  if (!n.empty() && n.size() != p.size())
+    throw std::invalid_argument("GpuOctreeTexture::lookup: one normal per point");
+  Lookups out;
+  out.nearest.resize(count);
+  out.nearest_found.resize(count);
+  out.filtered.resize(4 * count);
+  out.filtered_found.resize(count);
+  if (count == 0) return out;
+  if (!m.lookup.get()) {
+    const std::string cs =
+        std::string("#version 450 core\n#define OCT_LOOKUP_ONLY\n") + gl::kOctreeGlsl + kLookup;
+    m.lookup = gl::program("octree lookup", {{GL_COMPUTE_SHADER, cs}});
+  }
+  const float zero[3] = {0, 0, 0};
+  gl::Buffer pts = gl::buffer(p.data(), p.size_bytes());
+  gl::Buffer nrm = n.empty() ? gl::buffer(zero, sizeof zero) : gl::buffer(n.data(), n.size_bytes());
+  std::vector<uint32_t> res(6 * count);
+  gl::Buffer res_buf = gl::buffer(res.data(), res.size() * 4, true);
+  const GLuint prog = m.lookup.get();
+  glUseProgram(prog);
+  bind(prog, 2);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, pts.get());
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 7, nrm.get());
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 8, res_buf.get());
+  glUniform1ui(glGetUniformLocation(prog, "count"), GLuint(count));
+  glUniform1i(glGetUniformLocation(prog, "has_normals"), !n.empty());
+  glUniform1f(glGetUniformLocation(prog, "footprint"), footprint);
+  glDispatchCompute(GLuint((count + 63) / 64), 1, 1);
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  glGetNamedBufferSubData(res_buf.get(), 0, GLsizeiptr(res.size() * 4), res.data());
+  glUseProgram(0);
+  gl::check("GpuOctreeTexture::lookup");
+  for (size_t i = 0; i < count; ++i) {
+    out.nearest[i] = res[6 * i];
+    out.nearest_found[i] = res[6 * i + 1] & 1;
+    out.filtered_found[i] = res[6 * i + 1] >> 1 & 1;
+    for (int k = 0; k < 4; ++k) std::memcpy(&out.filtered[4 * i + k], &res[6 * i + 2 + k], 4);
+  }
+  return out;
+}
+
+}  // namespace limn
