@@ -226,9 +226,15 @@ void workflow(const std::filesystem::path& dir, std::string& md, nlohmann::json&
       "texture [torus.lot](torus.lot)). {:.0f} ms.\n\n",
       dabs, ts.painted_samples, ts.bytes, ts.bytes_per_painted_texel, ts.max_depth, t_paint);
   if (gl) {
-    MeshDrawer drawer(painted);
+    // The limit surface drawn by the tessellation shaders, coloured per fragment by the octree
+    // texture looked up on the GPU (no baking, no UVs).
+    const std::vector<float> table_points = table.points(cage.positions);
+    PatchDrawer drawer(cage, table, table_points);
+    GpuOctreeTexture gpu_texture(texture);
+    DrawOptions o;
+    o.texture = &gpu_texture;
     target->begin(white);
-    drawer.draw(overview(cage, 1.0f), DrawOptions{});
+    drawer.draw(overview(cage, 1.0f), o);
     save_image(*target, dir / "painted.png");
     md += "![painted](painted.png)\n\n";
   }
