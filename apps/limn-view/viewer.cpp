@@ -19,9 +19,36 @@
 #include "limn/render/image.hpp"
 #include "orbit.hpp"
 
+#if defined(__SANITIZE_ADDRESS__)
+#define LIMN_VIEW_PIN_LIBRARIES 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define LIMN_VIEW_PIN_LIBRARIES 1
+#endif
+#endif
+#ifdef LIMN_VIEW_PIN_LIBRARIES
+#include <dlfcn.h>
+#include <link.h>
+#endif
+
 namespace limn::view {
 
 namespace {
+
+// Sanitizer builds: GLFW and ImGui's GL loader dlclose the GL libraries on shutdown, and
+// LeakSanitizer would then report what the driver kept under an unknown module. Pinning every
+// loaded library keeps their names, which tests/lsan.supp suppresses (as GlContext does).
+void pin_loaded_libraries() {
+#ifdef LIMN_VIEW_PIN_LIBRARIES
+  dl_iterate_phdr(
+      [](dl_phdr_info* info, size_t, void*) -> int {
+        if (info->dlpi_name && info->dlpi_name[0])
+          dlopen(info->dlpi_name, RTLD_NOW | RTLD_NOLOAD | RTLD_NODELETE);
+        return 0;
+      },
+      nullptr);
+#endif
+}
 
 std::string g_glfw_error;
 
@@ -134,6 +161,7 @@ Viewer::Viewer(Scene& scene, const ViewerOptions& o) : scene_(scene), o_(o), ui_
   ImGui_ImplGlfw_InitForOpenGL(window_, true);
   ImGui_ImplOpenGL3_Init("#version 450 core");
   imgui_ = true;
+  pin_loaded_libraries();
 
   glfwGetFramebufferSize(window_, &fb_w_, &fb_h_);
   orbit_.frame(scene.cage(), std::max(fb_w_, 1), std::max(fb_h_, 1));
