@@ -8,7 +8,6 @@
 #include <stdexcept>
 
 #include "limn/mesh/io.hpp"
-#include "limn/paint/bake.hpp"
 #include "limn/paint/file.hpp"
 #include "limn/paint/surface.hpp"
 #include "limn/subdiv/refine.hpp"
@@ -25,8 +24,10 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
 // Cages above this are isolated per view instead of selected from a hierarchy, as `limn
 // subdivide --adaptive --errors auto` decides (the hierarchy is built whole, level by level).
 constexpr size_t kMeasuredFaces = 32768;
-// About this many triangles in the dense mesh painted on: fine enough for brush detail in the
-// baked vertex colours, small enough to re-bake after each stroke.
+// About this many triangles in the dense mesh painted on: close enough to the limit surface that
+// filtered lookups on the drawn surface find the texels painted on the mesh (nearest ones miss
+// a few, where the surface crosses into a cell the mesh does not), few enough for quick brush
+// hit tests and a quick simplify.
 constexpr double kDenseTriangles = 120000;
 
 void count_patches(const PatchTable& t, FrameStats& fs) {
@@ -71,6 +72,7 @@ void Scene::release_gl() {
   fixed_drawer_.reset();
   dynamic_drawer_.reset();
   painted_drawer_.reset();
+  gpu_texture_.reset();
   clusters_drawer_.reset();
   simplified_drawer_.reset();
   fixed_depth_ = -1;
@@ -94,9 +96,63 @@ void Scene::ensure_hierarchy(int max_depth) {
   dynamic_drawer_.reset();
 }
 
+void Scene::draw_surface(const Camera& camera, const SurfaceSettings& s, const DrawOptions& o,
+                         FrameStats& fs) {
+  fs.patches = true;
+  if (!s.dynamic) {
+    if (fixed_depth_ != s.depth || !fixed_drawer_) {
+      const auto t0 = std::chrono::steady_clock::now();
+      PatchOptions po = options_;
+      po.depth = s.depth;
+      fixed_ = build_patches(cage_, po);
+      fixed_points_ = fixed_.points(cage_.positions);
+      fixed_drawer_ = std::make_unique<PatchDrawer>(cage_, fixed_, fixed_points_);
+      fixed_depth_ = s.depth;
+      fs.select_ms = ms_since(t0), fs.reselected = true;
+    }
+    count_patches(fixed_, fs);
+    fs.draw = fixed_drawer_->draw(camera, o);
+    return;
+  }
+  ensure_hierarchy(s.max_depth);
+  const bool unchanged = dynamic_drawer_ && selected_tolerance_ == s.tolerance_px &&
+                         same_camera(selected_camera_, camera);
+  if (!unchanged) {
+    const auto t0 = std::chrono::steady_clock::now();
+    DepthOptions d;
+    d.tolerance_px = s.tolerance_px;
+    d.max_depth = s.max_depth;
+    // Hysteresis only across camera moves: a new tolerance starts from scratch.
+    const bool keep = selected_tolerance_ == s.tolerance_px;
+    std::vector<uint8_t> depth =
+        select_depths(cage_, model_, camera, d, keep ? vdepth_ : std::vector<uint8_t>{});
+    if (depth != vdepth_ || !dynamic_drawer_) {
+      vdepth_ = std::move(depth);
+      if (measured_) {
+        selection_ = select_patches(hierarchy_, vdepth_);
+        dynamic_drawer_ = std::make_unique<PatchDrawer>(cage_, selection_, hierarchy_points_);
+      } else {
+        PatchOptions po = options_;
+        po.depth = s.max_depth;
+        selection_ = build_patches(cage_, po, vdepth_);
+        selection_points_ = selection_.points(cage_.positions);
+        dynamic_drawer_ = std::make_unique<PatchDrawer>(cage_, selection_, selection_points_);
+      }
+      fs.reselected = true;
+    }
+    selected_tolerance_ = s.tolerance_px;
+    selected_camera_ = camera;
+    fs.select_ms = ms_since(t0);
+  }
+  count_patches(selection_, fs);
+  fs.draw = dynamic_drawer_->draw(camera, o);
+}
+
 FrameStats Scene::draw(Display display, const Camera& camera, const SurfaceSettings& s,
-                       const DrawOptions& o) {
+                       const DrawOptions& options) {
   FrameStats fs;
+  DrawOptions o = options;
+  o.texture = nullptr;
   if ((display == Display::clusters || display == Display::simplified) && !vsa_)
     display = Display::painted;
   switch (display) {
@@ -106,58 +162,20 @@ FrameStats Scene::draw(Display display, const Camera& camera, const SurfaceSetti
       fs.draw = cage_drawer_->draw(camera, o);
       break;
     case Display::surface:
-      if (!s.dynamic) {
-        if (fixed_depth_ != s.depth || !fixed_drawer_) {
-          const auto t0 = std::chrono::steady_clock::now();
-          PatchOptions po = options_;
-          po.depth = s.depth;
-          fixed_ = build_patches(cage_, po);
-          fixed_points_ = fixed_.points(cage_.positions);
-          fixed_drawer_ = std::make_unique<PatchDrawer>(cage_, fixed_, fixed_points_);
-          fixed_depth_ = s.depth;
-          fs.select_ms = ms_since(t0), fs.reselected = true;
-        }
-        count_patches(fixed_, fs);
-        fs.draw = fixed_drawer_->draw(camera, o);
-      } else {
-        ensure_hierarchy(s.max_depth);
-        const bool unchanged = dynamic_drawer_ && selected_tolerance_ == s.tolerance_px &&
-                               same_camera(selected_camera_, camera);
-        if (!unchanged) {
-          const auto t0 = std::chrono::steady_clock::now();
-          DepthOptions d;
-          d.tolerance_px = s.tolerance_px;
-          d.max_depth = s.max_depth;
-          // Hysteresis only across camera moves: a new tolerance starts from scratch.
-          const bool keep = selected_tolerance_ == s.tolerance_px;
-          std::vector<uint8_t> depth =
-              select_depths(cage_, model_, camera, d, keep ? vdepth_ : std::vector<uint8_t>{});
-          if (depth != vdepth_ || !dynamic_drawer_) {
-            vdepth_ = std::move(depth);
-            if (measured_) {
-              selection_ = select_patches(hierarchy_, vdepth_);
-              dynamic_drawer_ = std::make_unique<PatchDrawer>(cage_, selection_, hierarchy_points_);
-            } else {
-              PatchOptions po = options_;
-              po.depth = s.max_depth;
-              selection_ = build_patches(cage_, po, vdepth_);
-              selection_points_ = selection_.points(cage_.positions);
-              dynamic_drawer_ = std::make_unique<PatchDrawer>(cage_, selection_, selection_points_);
-            }
-            fs.reselected = true;
-          }
-          selected_tolerance_ = s.tolerance_px;
-          selected_camera_ = camera;
-          fs.select_ms = ms_since(t0);
-        }
-        count_patches(selection_, fs);
-        fs.draw = dynamic_drawer_->draw(camera, o);
-      }
+      draw_surface(camera, s, o, fs);
       break;
     case Display::painted:
-      ensure_paint();
-      if (painted_dirty_ || !painted_drawer_) rebake();
-      fs.draw = painted_drawer_->draw(camera, o);
+      // The texture was painted on the dense tessellation and is looked up on what is drawn:
+      // for cages the limit surface itself, as `surface` draws it (no bake to keep in step;
+      // see kDenseTriangles for how close the two are).
+      sync_gpu_texture();
+      o.texture = gpu_texture_.get();
+      if (is_cage()) {
+        draw_surface(camera, s, o, fs);
+      } else {
+        if (!painted_drawer_) painted_drawer_ = std::make_unique<MeshDrawer>(dense());
+        fs.draw = painted_drawer_->draw(camera, o);
+      }
       break;
     case Display::clusters:
       if (!clusters_drawer_)
@@ -195,19 +213,21 @@ const Mesh& Scene::dense() {
 
 void Scene::ensure_paint() {
   if (texture_) return;
-  const Mesh& m = dense();
-  surface_ = std::make_unique<PaintSurface>(m);
+  surface_ = std::make_unique<PaintSurface>(dense());
   texture_ = std::make_unique<OctreeTexture>(
       OctreeTexture::create(*surface_, pack_rgba8(214, 214, 220, 255)));
   painter_ = std::make_unique<StrokePainter>(*texture_, *surface_, &history_);
-  painted_ = m;
-  painted_dirty_ = true;
+  gpu_dirty_ = true;
 }
 
-void Scene::rebake() {
-  painted_.colors = bake_vertex_colors(*texture_, *dense_);
-  painted_drawer_ = std::make_unique<MeshDrawer>(painted_);
-  painted_dirty_ = false;
+void Scene::sync_gpu_texture() {
+  ensure_paint();
+  if (!gpu_texture_) {
+    gpu_texture_ = std::make_unique<GpuOctreeTexture>(*texture_);
+  } else if (gpu_dirty_) {
+    gpu_texture_->update(*texture_);
+  }
+  gpu_dirty_ = false;
 }
 
 void Scene::begin_stroke(const Brush& brush, const Camera& camera) {
@@ -235,26 +255,26 @@ bool Scene::stroke_to(double x, double y) {
     painter_->stroke_screen(xy);
   }
   last_point_ = {x, y};
-  painted_dirty_ = true;
+  gpu_dirty_ = true;
   return hit;
 }
 
 StrokeStats Scene::end_stroke() {
   if (!stroking_) return {};
   stroking_ = false;
-  painted_dirty_ = true;
+  gpu_dirty_ = true;
   return painter_->end();
 }
 
 bool Scene::undo() {
   if (!texture_ || stroking_ || !history_.undo(*texture_)) return false;
-  painted_dirty_ = true;
+  gpu_dirty_ = true;
   return true;
 }
 
 bool Scene::redo() {
   if (!texture_ || stroking_ || !history_.redo(*texture_)) return false;
-  painted_dirty_ = true;
+  gpu_dirty_ = true;
   return true;
 }
 
@@ -270,7 +290,7 @@ void Scene::load_texture(const std::filesystem::path& path) {
   // The painter holds a reference to *texture_: replace the contents, not the object.
   *texture_ = std::move(t);
   history_.clear();
-  painted_dirty_ = true;
+  gpu_dirty_ = true;
 }
 
 const VsaResult& Scene::simplify(size_t proxies) {

@@ -1,7 +1,8 @@
 // limn-view: what the viewer shows and edits, independent of the window and the UI. It composes
 // the library as the limn CLI does: the adaptive surface (a patch hierarchy built once, then a
 // view change only re-selects depths and patches), paint on a dense tessellation of the surface
-// into an octree texture (baked to vertex colours for display), and VSA of that tessellation.
+// into an octree texture (looked up per fragment on the GPU when the surface is drawn, so a
+// stroke only sends the words it changed), and VSA of that tessellation.
 // Drawing needs a current OpenGL 4.5 context; everything is built on first use.
 #pragma once
 
@@ -15,6 +16,7 @@
 #include "limn/paint/brush.hpp"
 #include "limn/paint/undo.hpp"
 #include "limn/render/draw.hpp"
+#include "limn/render/texture.hpp"
 #include "limn/simplify/vsa.hpp"
 #include "limn/subdiv/depth.hpp"
 #include "limn/subdiv/patches.hpp"
@@ -36,6 +38,7 @@ struct FrameStats {
   int deepest = 0;                  ///< deepest patch level shown
   double select_ms = 0;             ///< depth + patch selection (0 when the view kept them)
   bool reselected = false;
+  bool patches = false;  ///< the limit surface was drawn (the patch counts apply)
 };
 
 class Scene {
@@ -52,12 +55,14 @@ class Scene {
   bool is_cage() const { return cage_.face_count() <= kCageFaces; }
 
   /// Draws into the bound framebuffer. The surface re-selects its patches when the camera or
-  /// the settings changed its depths.
+  /// the settings changed its depths. `painted` is the surface (cages) or the mesh (scans)
+  /// coloured by the texture, sent to the GPU first if it changed since the last draw;
+  /// `options.texture` is ignored (the scene's own is used for `painted`, none otherwise).
   FrameStats draw(Display display, const Camera& camera, const SurfaceSettings& surface,
                   const DrawOptions& options);
 
-  /// Deletes every GL object (drawers); the next draw makes them again. Call while the context
-  /// they were made in is still current (before its window closes).
+  /// Deletes every GL object (drawers, the GPU texture); the next draw makes them again. Call
+  /// while the context they were made in is still current (before its window closes).
   void release_gl();
 
   // Paint (on the dense mesh; screen strokes through a camera, radius in pixels).
@@ -75,6 +80,12 @@ class Scene {
   void load_texture(const std::filesystem::path& path);
   /// The dense mesh painted on and simplified (built on first use).
   const Mesh& dense();
+  /// Words in the texture's pool (0 before any painting) and words sent to the GPU by its last
+  /// upload or update (0 before the first painted draw).
+  size_t texture_words() const { return texture_ ? texture_->words().size() : 0; }
+  size_t texture_upload_words() const {
+    return gpu_texture_ ? gpu_texture_->last_upload_words() : 0;
+  }
 
   // Simplify the dense mesh into `proxies` clusters.
   const VsaResult& simplify(size_t proxies);
@@ -85,8 +96,10 @@ class Scene {
 
  private:
   void ensure_paint();
-  void rebake();
+  void sync_gpu_texture();
   void ensure_hierarchy(int max_depth);
+  void draw_surface(const Camera& camera, const SurfaceSettings& s, const DrawOptions& o,
+                    FrameStats& fs);
 
   Mesh cage_;
   std::string name_;
@@ -120,9 +133,9 @@ class Scene {
   std::unique_ptr<OctreeTexture> texture_;
   PaintHistory history_;
   std::unique_ptr<StrokePainter> painter_;
-  Mesh painted_;
-  std::unique_ptr<MeshDrawer> painted_drawer_;
-  bool stroking_ = false, painted_dirty_ = true;
+  std::unique_ptr<GpuOctreeTexture> gpu_texture_;
+  std::unique_ptr<MeshDrawer> painted_drawer_;  // scans: the mesh itself, smooth shaded
+  bool stroking_ = false, gpu_dirty_ = true;
   std::vector<double> last_point_;
 
   // Simplify.

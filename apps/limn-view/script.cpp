@@ -140,8 +140,11 @@ Action parse_action(const json& v, std::string where) {
   } else if (key == "surface") {
     a.kind = K::surface;
     parse_surface(a, value);
-  } else if (key == "wireframe" || key == "depth_colors" || key == "ui") {
-    a.kind = key == "wireframe" ? K::wireframe : key == "ui" ? K::ui : K::depth_colors;
+  } else if (key == "wireframe" || key == "depth_colors" || key == "filtered" || key == "ui") {
+    a.kind = key == "wireframe"  ? K::wireframe
+             : key == "ui"       ? K::ui
+             : key == "filtered" ? K::filtered
+                                 : K::depth_colors;
     a.flag = boolean(a, value, key.c_str());
   } else if (key == "stroke") {
     a.kind = K::stroke;

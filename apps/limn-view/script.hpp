@@ -9,6 +9,7 @@
 //   {"surface": {"dynamic": bool, "depth": 0-10, "tolerance": px, "max_depth": 1-10,
 //                "tess_px": px}}                      (any subset of the keys)
 //   {"wireframe": bool}  {"depth_colors": bool}  {"ui": bool}
+//   {"filtered": bool}                 (painted colour filtered, or the nearest texel)
 //   {"stroke": {"points": [[x, y], ...], "radius": px, "color": [r, g, b(, a)], "opacity": o,
 //               "hardness": h, "blend": "mix" | "add" | "multiply" | "erase", "depth": d,
 //               "spacing": s}}       (window pixels, y down; only "points" is required)
@@ -57,6 +58,7 @@ struct Action {
     surface,
     wireframe,
     depth_colors,
+    filtered,
     ui,
     stroke,
     undo,
@@ -70,7 +72,7 @@ struct Action {
   };
   Kind kind = Kind::frames;
   double x = 0, y = 0;  ///< orbit (degrees), pan (pixels), zoom (x: factor)
-  bool flag = false;    ///< wireframe, depth_colors, ui
+  bool flag = false;    ///< wireframe, depth_colors, filtered, ui
   Mode mode = Mode::view;
   Display display = Display::surface;
   SurfaceChange surface;

@@ -2,7 +2,8 @@
 #   MODE=script: limn-view runs tests/data/view_script.json under Xvfb (a dynamic-depth surface,
 #     fixed depth, the cage, a paint stroke, undo/redo, .lot save and load, a simplify run and
 #     its export); its screenshots must not be blank and the stroke's colour must appear where
-#     it should (painted, reloaded) and nowhere else (before, undone). Then --frames/--screenshot.
+#     it should (painted, redone with nearest texels, reloaded) and nowhere else (before,
+#     undone). Then --frames/--screenshot.
 #   MODE=bad: a missing mesh, a bad mesh and bad scripts exit 2 with one line naming the file,
 #     before any window opens.
 # Variables: VIEW, CHECK (limn-view-check), XVFB_RUN, SCRIPT, BAD_MESH, WORK_DIR.
@@ -44,6 +45,7 @@ if(MODE STREQUAL "script")
   check(before.png --absent 1,0,1)
   check(painted.png --present 1,0,1 --min-pixels 500)
   check(undone.png --absent 1,0,1)
+  check(nearest.png --present 1,0,1 --min-pixels 500)
   check(reloaded.png --present 1,0,1 --min-pixels 500)
   check(clusters.png)
   foreach(f view.lot simplified.obj)

@@ -16,39 +16,13 @@
 #include <stdexcept>
 #include <string>
 
+#include "limn/render/gl_context.hpp"
 #include "limn/render/image.hpp"
 #include "orbit.hpp"
-
-#if defined(__SANITIZE_ADDRESS__)
-#define LIMN_VIEW_PIN_LIBRARIES 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define LIMN_VIEW_PIN_LIBRARIES 1
-#endif
-#endif
-#ifdef LIMN_VIEW_PIN_LIBRARIES
-#include <dlfcn.h>
-#include <link.h>
-#endif
 
 namespace limn::view {
 
 namespace {
-
-// Sanitizer builds: GLFW and ImGui's GL loader dlclose the GL libraries on shutdown, and
-// LeakSanitizer would then report what the driver kept under an unknown module. Pinning every
-// loaded library keeps their names, which tests/lsan.supp suppresses (as GlContext does).
-void pin_loaded_libraries() {
-#ifdef LIMN_VIEW_PIN_LIBRARIES
-  dl_iterate_phdr(
-      [](dl_phdr_info* info, size_t, void*) -> int {
-        if (info->dlpi_name && info->dlpi_name[0])
-          dlopen(info->dlpi_name, RTLD_NOW | RTLD_NOLOAD | RTLD_NODELETE);
-        return 0;
-      },
-      nullptr);
-#endif
-}
 
 std::string g_glfw_error;
 
@@ -161,7 +135,8 @@ Viewer::Viewer(Scene& scene, const ViewerOptions& o) : scene_(scene), o_(o), ui_
   ImGui_ImplGlfw_InitForOpenGL(window_, true);
   ImGui_ImplOpenGL3_Init("#version 450 core");
   imgui_ = true;
-  pin_loaded_libraries();
+  // GLFW unloads the GL driver at exit; keep it so LeakSanitizer can name what it keeps.
+  keep_gl_libraries_loaded();
 
   glfwGetFramebufferSize(window_, &fb_w_, &fb_h_);
   orbit_.frame(scene.cage(), std::max(fb_w_, 1), std::max(fb_h_, 1));
@@ -238,6 +213,9 @@ void Viewer::apply(const Action& a) {
       break;
     case K::depth_colors:
       draw_.depth_colors = a.flag;
+      break;
+    case K::filtered:
+      draw_.texture_nearest = !a.flag;
       break;
     case K::ui:
       ui_ = a.flag;
@@ -398,13 +376,15 @@ void Viewer::panel() {
   ImGui::Text("frame %.2f ms (%.0f fps)", smooth_ms_, smooth_ms_ > 0 ? 1000.0 / smooth_ms_ : 0.0);
   ImGui::Text("draw: gpu %.2f ms, cpu %.2f ms", stats_.draw.gpu_ms, stats_.draw.cpu_ms);
   const auto triangles = static_cast<unsigned long long>(stats_.draw.triangles);
-  if (display_ == Display::surface) {
+  if (stats_.patches) {
     ImGui::Text("patches %zu (%zu end caps), deepest %d", stats_.regular + stats_.gregory,
                 stats_.gregory, stats_.deepest);
     ImGui::Text("%llu triangles, re-selection %.2f ms", triangles, select_ms_);
   } else {
     ImGui::Text("%zu polygons, %llu triangles", stats_.draw.patches, triangles);
   }
+  if (const size_t words = scene_.texture_words())
+    ImGui::Text("texture %zu words, last update sent %zu", words, scene_.texture_upload_words());
   ImGui::Separator();
 
   int mode = int(mode_);
@@ -445,6 +425,8 @@ void Viewer::panel() {
     const char* blends[] = {"mix", "add", "multiply", "erase"};
     if (ImGui::Combo("blend", &blend_, blends, 4)) brush_.blend = BlendMode(blend_);
     ImGui::SliderInt("brush depth", &brush_.depth, 4, 14);
+    bool filtered = !draw_.texture_nearest;
+    if (ImGui::Checkbox("filtered", &filtered)) draw_.texture_nearest = !filtered;
     if (ImGui::Button("Undo")) scene_.undo();
     ImGui::SameLine();
     if (ImGui::Button("Redo")) scene_.redo();

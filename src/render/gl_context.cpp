@@ -48,11 +48,9 @@ EGLDisplay open_display() {
   throw egl_error("opening an EGL display (is Mesa's libegl-mesa0 installed?)");
 }
 
-// Under AddressSanitizer: the driver (Mesa, LLVM) keeps a few allocations to the end of the
-// process and unloads its libraries at eglTerminate, so LeakSanitizer reports them with no
-// module to tell them from ours. Pinning every loaded library keeps their names in the reports,
-// where tests/lsan.supp can name them.
-void pin_loaded_libraries() {
+}  // namespace
+
+void keep_gl_libraries_loaded() {
 #ifdef LIMN_PIN_GL_LIBRARIES
   dl_iterate_phdr(
       [](dl_phdr_info* info, size_t, void*) -> int {
@@ -63,8 +61,6 @@ void pin_loaded_libraries() {
       nullptr);
 #endif
 }
-
-}  // namespace
 
 GlContext::GlContext() {
   EGLDisplay d = open_display();
@@ -93,14 +89,14 @@ GlContext::GlContext() {
   }
   renderer_ = fmt::format("{}, {}", reinterpret_cast<const char*>(glGetString(GL_RENDERER)),
                           reinterpret_cast<const char*>(glGetString(GL_VERSION)));
-  pin_loaded_libraries();
+  keep_gl_libraries_loaded();
 }
 
 GlContext::~GlContext() {
   EGLDisplay d = display_;
   eglMakeCurrent(d, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
   eglDestroyContext(d, static_cast<EGLContext>(context_));
-  pin_loaded_libraries();
+  keep_gl_libraries_loaded();
   eglTerminate(d);
 }
 

@@ -29,4 +29,11 @@ class GlContext {
   std::string renderer_;
 };
 
+/// In AddressSanitizer builds, marks every library loaded so far as never to be unloaded: the GL
+/// driver keeps a few allocations to the end of the process and unloads itself at teardown, so
+/// LeakSanitizer would report them under no module name; pinned, they keep their names, which
+/// tests/lsan.supp suppresses. GlContext calls it; windowed apps call it once their context is
+/// up. A no-op in other builds. O(loaded libraries).
+void keep_gl_libraries_loaded();
+
 }  // namespace limn
