@@ -6,11 +6,13 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <map>
 #include <random>
 #include <set>
+#include <string>
 
 #include "limn/mesh/io.hpp"
 #include "limn/mesh/topology.hpp"
@@ -90,21 +92,51 @@ TEST_P(SimplifyModels, OutputIsValidInTrianglesAndPolygons) {
   }
 }
 
-// Every shared triangle mesh; the two largest at the benchmark's K.
-INSTANTIATE_TEST_SUITE_P(
-    Shared, SimplifyModels,
-    ::testing::Values(ModelCase{"fandisk.obj", 30}, ModelCase{"stanford-bunny.obj", 100},
-                      ModelCase{"feline.obj", 200}, ModelCase{"armadillo-100k.obj", 200},
-                      ModelCase{"armadillo-cgal-52k.off", 100}, ModelCase{"igea.obj", 300},
-                      ModelCase{"nefertiti.obj", 100}, ModelCase{"ogre.obj", 100},
-                      ModelCase{"homer.obj", 50}, ModelCase{"rocker-arm.obj", 50},
-                      ModelCase{"spot.obj", 30}, ModelCase{"blade.off", 60}),
-    [](const auto& param_info) {
-      std::string n = param_info.param.file;
-      n = n.substr(0, n.find('.'));
-      std::replace(n.begin(), n.end(), '-', '_');
-      return n;
-    });
+// Every shared triangle mesh; the two largest at the benchmark's K. SimplifyModelsList checks
+// that no mesh in the folder is missing here.
+const ModelCase kModelCases[] = {{"fandisk.obj", 30},
+                                 {"stanford-bunny.obj", 100},
+                                 {"feline.obj", 200},
+                                 {"armadillo-100k.obj", 200},
+                                 {"armadillo-cgal-52k.off", 100},
+                                 {"igea.obj", 300},
+                                 {"nefertiti.obj", 100},
+                                 {"ogre.obj", 100},
+                                 {"homer.obj", 50},
+                                 {"rocker-arm.obj", 50},
+                                 {"spot.obj", 30},
+                                 {"blade.off", 60}};
+
+INSTANTIATE_TEST_SUITE_P(Shared, SimplifyModels, ::testing::ValuesIn(kModelCases),
+                         [](const auto& param_info) {
+                           std::string n = param_info.param.file;
+                           n = n.substr(0, n.find('.'));
+                           std::replace(n.begin(), n.end(), '-', '_');
+                           return n;
+                         });
+
+// A mesh added to ../shared/models/tri later must get a case above (with a K chosen for it)
+// rather than be skipped silently: every obj/ply/off file there is in the list, and every listed
+// file is there.
+TEST(SimplifyModelsList, CoversEveryMeshInTheSharedFolder) {
+  const fs::path dir = kModels / "tri";
+  ASSERT_TRUE(fs::is_directory(dir)) << dir;
+  std::set<std::string> listed;
+  for (const ModelCase& c : kModelCases) listed.insert(c.file);
+  std::set<std::string> found;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    if (!e.is_regular_file()) continue;
+    std::string ext = e.path().extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char ch) { return char(std::tolower(ch)); });
+    if (ext == ".obj" || ext == ".ply" || ext == ".off") found.insert(e.path().filename().string());
+  }
+  EXPECT_FALSE(found.empty()) << dir;
+  for (const std::string& f : found)
+    EXPECT_TRUE(listed.count(f)) << f << " in " << dir << " has no SimplifyModels case";
+  for (const std::string& f : listed)
+    EXPECT_TRUE(found.count(f)) << f << " is listed but not in " << dir;
+}
 
 TEST(SimplifyMeshing, ClosedGenusZeroModelsKeepTheirEulerCharacteristic) {
   for (const char* name : {"spot.obj", "fandisk.obj", "homer.obj", "rocker-arm.obj"}) {
