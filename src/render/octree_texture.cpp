@@ -299,14 +299,16 @@ vec3 oct_paint(vec3 base, vec3 pos, vec3 nrm) {
   if (oct_mode == 0) return base;
   float footprint = max(length(dFdx(pos)), length(dFdy(pos)));
   vec4 c = oct_unpack(oct_background);
-  if (oct_mode == 1) {
-    uint col;
-    int lv;
-    if (oct_nearest(pos, nrm, col, lv)) c = oct_unpack(col);
-  } else {
-    vec4 f;
-    if (oct_filtered(pos, nrm, footprint, f)) c = f;
-  }
+  // A surface drawn from patches lies a little off the triangles it was painted on, and may
+  // cross into a cell they never touched: a nearest miss falls back to the filtered lookup,
+  // whose taps reach the neighbouring cells.
+  uint col;
+  int lv;
+  vec4 f;
+  if (oct_mode == 1 && oct_nearest(pos, nrm, col, lv))
+    c = oct_unpack(col);
+  else if (oct_filtered(pos, nrm, footprint, f))
+    c = f;
   return mix(base, c.rgb, c.a);
 }
 #endif
@@ -381,17 +383,52 @@ void GpuOctreeTexture::update(const OctreeTexture& t) {
         "OpenGL: the octree texture's pool ({} MB) exceeds the driver's largest storage buffer "
         "({} MB)",
         words.size_bytes() >> 20, max_bytes >> 20));
-  if (words.size() != m.shadow.size() || !m.pool.get()) {
+  const size_t n = words.size(), held = m.shadow.size();
+  if (!m.pool.get() || n < held) {  // new, or compacted: everything moved
     gl::upload(m.pool, m.capacity, words.data(), words.size_bytes());
-    m.last_words = words.size();
+    m.last_words = n;
   } else {
-    size_t lo = 0, hi = words.size();
-    while (lo < hi && words[lo] == m.shadow[lo]) ++lo;
-    while (hi > lo && words[hi - 1] == m.shadow[hi - 1]) --hi;
-    if (hi > lo)
+    if (n * 4 > m.capacity) {
+      // A stroke over new surface appends blocks: grow by half on the GPU, copying what it
+      // holds there, so the bus carries only what the stroke wrote.
+      const size_t cap = std::max(n * 4, m.capacity + m.capacity / 2);
+      gl::Buffer grown = gl::buffer(nullptr, cap, true);
+      glCopyNamedBufferSubData(m.pool.get(), grown.get(), 0, 0, GLsizeiptr(held * 4));
+      m.pool = std::move(grown);
+      m.capacity = cap;
+    }
+    // Runs of changed words (gaps under 256 words merged, so a stroke's scattered node
+    // rewrites go as a few transfers), plus everything appended after `held`.
+    constexpr size_t kGap = 256;
+    size_t sent = 0;
+    auto send = [&](size_t lo, size_t hi) {
       glNamedBufferSubData(m.pool.get(), GLintptr(lo * 4), GLsizeiptr((hi - lo) * 4),
                            words.data() + lo);
-    m.last_words = hi - lo;
+      sent += hi - lo;
+    };
+    size_t i = 0, tail = held;
+    while (i < held) {
+      if (words[i] == m.shadow[i]) {
+        ++i;
+        continue;
+      }
+      const size_t lo = i;
+      size_t hi = i + 1, same = 0;
+      for (i = hi; i < held && same < kGap; ++i) {
+        if (words[i] != m.shadow[i])
+          hi = i + 1, same = 0;
+        else
+          ++same;
+      }
+      if (hi == held && n > held) {  // goes out with the appended words
+        tail = lo;
+        break;
+      }
+      send(lo, hi);
+      i = hi;
+    }
+    if (n > held) send(tail, n);
+    m.last_words = sent;
   }
   m.shadow.assign(words.begin(), words.end());
   gl::check("GpuOctreeTexture::update");
