@@ -18,48 +18,12 @@
 #include "limn/mesh/io.hpp"
 #include "limn/subdiv/depth.hpp"
 #include "limn/subdiv/patches.hpp"
+#include "screen_error.hpp"
 
 using namespace limn;
+using limn::bench::measured_error;
+using limn::bench::Reference;
 namespace fs = std::filesystem;
-
-namespace {
-
-struct Reference {
-  PatchTable table;
-  std::vector<float> points;
-};
-
-double measured_error(const Mesh& cage, const PatchTable& t, const Reference& ref,
-                      const Camera& cam) {
-  const std::vector<float> pts = t.points(cage.positions);
-  const PatchMap map(ref.table);
-  std::vector<PatchCoord> a, b;
-  const size_t nr = t.regular_params.size();
-  for (uint32_t i = 0; i < t.patch_count(); ++i) {
-    const PatchParam& p = i < nr ? t.regular_params[i] : t.gregory_params[i - nr];
-    const double size = 1.0 / double(1u << p.depth);
-    for (double s : {0.1, 0.5, 0.9})
-      for (double u : {0.1, 0.5, 0.9}) {
-        a.push_back({i, float(s), float(u)});
-        b.push_back(map.find(p.ptex, (p.u + s) * size, (p.v + u) * size));
-      }
-  }
-  std::vector<float> pa(3 * a.size()), pb(3 * b.size());
-  evaluate_patches(t, pts, a, pa.data());
-  evaluate_patches(ref.table, ref.points, b, pb.data());
-  double worst = 0;
-  for (size_t i = 0; i < a.size(); ++i) {
-    double x, y;
-    if (!cam.project(&pb[3 * i], x, y) || x < 0 || y < 0 || x > cam.width || y > cam.height)
-      continue;
-    const double d = std::hypot(pa[3 * i] - pb[3 * i], pa[3 * i + 1] - pb[3 * i + 1],
-                                pa[3 * i + 2] - pb[3 * i + 2]);
-    worst = std::max(worst, d * cam.scale_at(&pb[3 * i]));
-  }
-  return worst;
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   float tolerance = 0.5f;

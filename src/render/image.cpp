@@ -65,6 +65,10 @@ void RenderTarget::begin(const float clear_rgba[4]) {
   glClearNamedFramebufferfv(impl_->fbo.get(), GL_DEPTH, 0, &one);
 }
 
+void RenderTarget::finish() {
+  glFinish();
+}
+
 std::vector<uint8_t> RenderTarget::read_rgba() {
   Impl& m = *impl_;
   GLuint src = m.fbo.get();

@@ -24,6 +24,9 @@ class RenderTarget {
   void begin(const float clear_rgba[4]);
   /// The image as RGBA8, rows top to bottom (multisampling resolved). O(pixels).
   std::vector<uint8_t> read_rgba();
+  /// Waits until every command issued so far has finished (glFinish): what frame timings stop at,
+  /// since a software driver's timer queries see only the submission.
+  void finish();
   int width() const { return width_; }
   int height() const { return height_; }
 
