@@ -62,12 +62,9 @@ int main(int argc, char** argv) {
         fs::path(name).filename().string(), hierarchy.node_count(), hierarchy.table.patch_count(),
         hier_ms, measure_ms);
     const Camera framed = frame_camera(cage, w, h);
-    const std::pair<const char*, float> path[] = {{"near", 0.35f}, {"mid", 1.0f}, {"far", 3.0f}};
-    for (const auto& [label, zoom] : path)
+    for (const auto& [label, zoom] : bench::kCameraPath)
       for (const bool measure : {false, true}) {
-        Camera cam = framed;
-        for (int k = 0; k < 3; ++k)
-          cam.eye[k] = cam.target[k] + zoom * (framed.eye[k] - framed.target[k]);
+        const Camera cam = bench::path_camera(framed, zoom);
         DepthOptions d;
         d.tolerance_px = tolerance;
         d.max_depth = 10;

@@ -88,11 +88,8 @@ int main(int argc, char** argv) {
     measure_vertex_errors(cage, hierarchy, errors);
     const std::vector<float> hpoints = hierarchy.table.points(cage.positions);
     const Camera framed = frame_camera(cage, w, h);
-    const std::pair<const char*, float> path[] = {{"near", 0.35f}, {"mid", 1.0f}, {"far", 3.0f}};
-    for (const auto& [label, zoom] : path) {
-      Camera cam = framed;
-      for (int k = 0; k < 3; ++k)
-        cam.eye[k] = cam.target[k] + zoom * (framed.eye[k] - framed.target[k]);
+    for (const auto& [label, zoom] : bench::kCameraPath) {
+      const Camera cam = bench::path_camera(framed, zoom);
       DepthOptions d;
       d.tolerance_px = tolerance;
       d.max_depth = 10;

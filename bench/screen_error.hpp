@@ -47,4 +47,19 @@ inline double measured_error(const Mesh& cage, const PatchTable& t, const Refere
   return worst;
 }
 
+/// The equal-error benchmarks' camera path: the framing camera moved along its view axis to
+/// `zoom` times its distance (near 0.35, mid 1, far 3).
+struct PathStop {
+  const char* label;
+  float zoom;
+};
+inline constexpr PathStop kCameraPath[] = {{"near", 0.35f}, {"mid", 1.0f}, {"far", 3.0f}};
+
+inline Camera path_camera(const Camera& framed, float zoom) {
+  Camera cam = framed;
+  for (int k = 0; k < 3; ++k)
+    cam.eye[k] = cam.target[k] + zoom * (framed.eye[k] - framed.target[k]);
+  return cam;
+}
+
 }  // namespace limn::bench

@@ -5,6 +5,7 @@
 #include <new>
 #include <string>
 
+#include "../common/image_size.hpp"
 #include "limn/mesh/io.hpp"
 #include "limn/mesh/shapes.hpp"
 #include "limn/version.hpp"
@@ -15,18 +16,7 @@
 namespace {
 
 void parse_size(const std::string& s, int& w, int& h) {
-  const size_t x = s.find('x');
-  try {
-    if (x == std::string::npos) throw std::invalid_argument(s);
-    size_t a = 0, b = 0;
-    w = std::stoi(s.substr(0, x), &a);
-    h = std::stoi(s.substr(x + 1), &b);
-    if (a != x || b != s.size() - x - 1) throw std::invalid_argument(s);
-  } catch (const std::exception&) {
-    throw limn::InputError("--size " + s + ": expected WxH, such as 1280x800");
-  }
-  if (w < 64 || h < 64 || w > 16384 || h > 16384)
-    throw limn::InputError("--size " + s + ": 64-16384 pixels each way");
+  limn::app::parse_image_size(s, "--size", "1280x800", 64, 16384, w, h);
 }
 
 }  // namespace

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "../common/image_size.hpp"
+
 namespace limn::cli {
 
 Camera parse_camera(const std::string& s, Camera c) {
@@ -31,18 +33,7 @@ Camera parse_camera(const std::string& s, Camera c) {
 }
 
 void parse_resolution(const std::string& s, int& w, int& h) {
-  const size_t x = s.find('x');
-  try {
-    if (x == std::string::npos) throw std::invalid_argument(s);
-    size_t a = 0, b = 0;
-    w = std::stoi(s.substr(0, x), &a);
-    h = std::stoi(s.substr(x + 1), &b);
-    if (a != x || b != s.size() - x - 1) throw std::invalid_argument(s);
-  } catch (const std::exception&) {
-    throw InputError(fmt::format("--resolution {}: expected WxH, such as 1280x720", s));
-  }
-  if (w < 1 || h < 1 || w > 32768 || h > 32768)
-    throw InputError(fmt::format("--resolution {}: 1-32768 pixels each way", s));
+  app::parse_image_size(s, "--resolution", "1280x720", 1, 32768, w, h);
 }
 
 void check_adaptive(const AdaptiveOpts& a, int& w, int& h) {

@@ -69,6 +69,20 @@ bool oct_brick_leaf(uint word, int level, uvec3 c, vec3 n, out uint col) {
   return true;
 }
 
+// The sample facing n of leaf cell `bit` of a general node with the given info, whose tags start
+// at `base` (after its descriptors, brick words and average).
+bool oct_general_leaf(uint base, uint info, uint bit, vec3 n, out uint col) {
+  col = oct_background;
+  uint lf = (info >> 8) & 255u, dbl = info >> 24, below = bit - 1u;
+  uint r = uint(bitCount(lf & below));
+  uint si = r + uint(bitCount(dbl & below));
+  uint tag = (pool[base + r / 8u] >> (4u * (r % 8u))) & 15u;
+  int side = oct_side(tag, n);
+  if (side != 0 && (dbl & bit) == 0u) return false;
+  col = pool[base + (uint(bitCount(lf)) + 7u) / 8u + si + uint(side)];
+  return true;
+}
+
 // OctreeSampler::nearest_at: the leaf holding c (level-16 coordinates), its sample facing n.
 bool oct_nearest_at(uvec3 c, vec3 n, out uint col, out int level) {
   col = oct_background;
@@ -79,7 +93,7 @@ bool oct_nearest_at(uvec3 c, vec3 n, out uint col, out int level) {
     level = l + 1;
     if ((info & bit) == 0u) return false;
     uint below = bit - 1u;
-    uint lf = (info >> 8) & 255u, br = (info >> 16) & 255u, dbl = info >> 24;
+    uint lf = (info >> 8) & 255u, br = (info >> 16) & 255u;
     uint gen = info & 255u & ~lf & ~br;
     if ((gen & bit) != 0u) {
       uint i = ptr + 2u * uint(bitCount(gen & below));
@@ -93,14 +107,7 @@ bool oct_nearest_at(uvec3 c, vec3 n, out uint col, out int level) {
       level = l + 3;
       return oct_brick_leaf(w, l + 1, c, n, col);
     }
-    uint base = after_gen + uint(bitCount(br)) + 1u;
-    uint r = uint(bitCount(lf & below));
-    uint si = r + uint(bitCount(dbl & below));
-    uint tag = (pool[base + r / 8u] >> (4u * (r % 8u))) & 15u;
-    int side = oct_side(tag, n);
-    if (side != 0 && (dbl & bit) == 0u) return false;
-    col = pool[base + (uint(bitCount(lf)) + 7u) / 8u + si + uint(side)];
-    return true;
+    return oct_general_leaf(after_gen + uint(bitCount(br)) + 1u, info, bit, n, col);
   }
   return false;
 }
@@ -144,7 +151,7 @@ bool oct_cell_value(uvec3 c, int level, vec3 n, out uint col) {
     uint bit = 1u << oct_octant(c, kD - 1 - l);
     if ((info & bit) == 0u) return false;
     uint below = bit - 1u;
-    uint lf = (info >> 8) & 255u, br = (info >> 16) & 255u, dbl = info >> 24;
+    uint lf = (info >> 8) & 255u, br = (info >> 16) & 255u;
     uint gen = info & 255u & ~lf & ~br;
     uint after_gen = ptr + 2u * uint(bitCount(gen));
     if ((gen & bit) != 0u) {
@@ -188,14 +195,7 @@ bool oct_cell_value(uvec3 c, int level, vec3 n, out uint col) {
       }
       return oct_brick_leaf(w, l + 1, c, n, col);
     }
-    uint base = after_gen + uint(bitCount(br)) + 1u;
-    uint r = uint(bitCount(lf & below));
-    uint si = r + uint(bitCount(dbl & below));
-    uint tag = (pool[base + r / 8u] >> (4u * (r % 8u))) & 15u;
-    int side = oct_side(tag, n);
-    if (side != 0 && (dbl & bit) == 0u) return false;
-    col = pool[base + (uint(bitCount(lf)) + 7u) / 8u + si + uint(side)];
-    return true;
+    return oct_general_leaf(after_gen + uint(bitCount(br)) + 1u, info, bit, n, col);
   }
   return false;
 }
