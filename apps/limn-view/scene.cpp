@@ -130,13 +130,19 @@ void Scene::draw_surface(const Camera& camera, const SurfaceSettings& s, const D
       vdepth_ = std::move(depth);
       if (measured_) {
         selection_ = select_patches(hierarchy_, vdepth_);
-        dynamic_drawer_ = std::make_unique<PatchDrawer>(cage_, selection_, hierarchy_points_);
+        // Same hierarchy, same points: only the selection's patch arrays go to the GPU.
+        if (dynamic_drawer_ && dynamic_from_hierarchy_)
+          dynamic_drawer_->set_patches(selection_);
+        else
+          dynamic_drawer_ = std::make_unique<PatchDrawer>(cage_, selection_, hierarchy_points_);
+        dynamic_from_hierarchy_ = true;
       } else {
         PatchOptions po = options_;
         po.depth = s.max_depth;
         selection_ = build_patches(cage_, po, vdepth_);
         selection_points_ = selection_.points(cage_.positions);
         dynamic_drawer_ = std::make_unique<PatchDrawer>(cage_, selection_, selection_points_);
+        dynamic_from_hierarchy_ = false;
       }
       fs.reselected = true;
     }

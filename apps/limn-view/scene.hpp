@@ -124,6 +124,7 @@ class Scene {
   PatchTable selection_;
   std::vector<float> selection_points_;  // estimated errors: the selection's own points
   std::unique_ptr<PatchDrawer> dynamic_drawer_;
+  bool dynamic_from_hierarchy_ = false;  // dynamic_drawer_ reads hierarchy_points_
   float selected_tolerance_ = -1;
   Camera selected_camera_;
 

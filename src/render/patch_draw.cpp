@@ -321,7 +321,7 @@ struct PatchDrawer::Impl {
   gl::Program regular_program, gregory_program;
   gl::Program regular_capture, gregory_capture;  // transform feedback, no rasterisation
   gl::Buffer points, regular_cvs, gregory_cvs, infos, lines;
-  size_t points_cap = 0, lines_cap = 0;
+  size_t points_cap = 0, lines_cap = 0, regular_cap = 0, gregory_cap = 0, infos_cap = 0;
   gl::VertexArray vao;
   gl::Query time_query, primitives_query;
   gl::Framebuffer capture_fbo;
@@ -339,40 +339,7 @@ PatchDrawer::PatchDrawer(const Mesh& cage, const PatchTable& table, std::span<co
   Impl& m = *impl_;
   m.cage = &cage;
   m.topo = build_topology(cage);
-  if (table.ptex_of_face.size() != cage.face_count() + 1)
-    throw InputError("render: the patch table was built from another cage");
-  m.regular = table.regular_params.size();
-  m.gregory = table.gregory_params.size();
-  std::vector<PatchInfo> infos;
-  infos.reserve(m.regular + m.gregory);
-  const uint32_t ne = uint32_t(m.topo.edge_count());
-  for (const auto* params : {&table.regular_params, &table.gregory_params})
-    for (const PatchParam& pp : *params) {
-      PatchInfo in{};
-      const uint32_t f = pp.base_face, b = cage.face_offsets[f], n = cage.face_size(f);
-      const uint32_t last = (1u << pp.depth) - 1;
-      for (int e = 0; e < 4; ++e) in.keys[e] = ne + f;  // inside the cage face
-      auto edge_of = [&](uint32_t corner) { return m.topo.corner_edge[b + corner % n]; };
-      if (n == 4) {
-        if (pp.v == 0) in.keys[0] = edge_of(0);
-        if (pp.u == last) in.keys[1] = edge_of(1);
-        if (pp.v == last) in.keys[2] = edge_of(2);
-        if (pp.u == 0) in.keys[3] = edge_of(3);
-      } else {  // corner c's quad: edge 0 on cage edge (c, c+1), edge 3 on (c-1, c)
-        if (pp.v == 0) in.keys[0] = edge_of(pp.corner);
-        if (pp.u == 0) in.keys[3] = edge_of(pp.corner + n - 1);
-      }
-      in.bits = uint32_t(pp.level) | uint32_t(pp.boundary & 0xF) << 8 |
-                uint32_t(pp.transition & 0xF) << 12 | uint32_t(pp.type) << 16 |
-                uint32_t(pp.crease_edge & 3) << 18;
-      in.sharpness = pp.sharpness;
-      infos.push_back(in);
-    }
-  for (const uint32_t p : table.regular_points) m.max_index = std::max(m.max_index, p);
-  for (const uint32_t p : table.gregory_points) m.max_index = std::max(m.max_index, p);
-  m.regular_cvs = gl::buffer(table.regular_points.data(), table.regular_points.size() * 4);
-  m.gregory_cvs = gl::buffer(table.gregory_points.data(), table.gregory_points.size() * 4);
-  m.infos = gl::buffer(infos.data(), infos.size() * sizeof(PatchInfo));
+  upload_patches(table);
   const std::string vs16 = with_header(16, kVertex), vs20 = with_header(20, kVertex);
   const std::string tc16 = with_header(16, kInfo, kControl),
                     tc20 = with_header(20, kInfo, kControl);
@@ -404,6 +371,61 @@ PatchDrawer::PatchDrawer(const Mesh& cage, const PatchTable& table, std::span<co
 }
 
 PatchDrawer::~PatchDrawer() = default;
+
+void PatchDrawer::upload_patches(const PatchTable& table) {
+  Impl& m = *impl_;
+  const Mesh& cage = *m.cage;
+  if (table.ptex_of_face.size() != cage.face_count() + 1)
+    throw InputError("render: the patch table was built from another cage");
+  m.regular = table.regular_params.size();
+  m.gregory = table.gregory_params.size();
+  std::vector<PatchInfo> infos;
+  infos.reserve(m.regular + m.gregory);
+  const uint32_t ne = uint32_t(m.topo.edge_count());
+  for (const auto* params : {&table.regular_params, &table.gregory_params})
+    for (const PatchParam& pp : *params) {
+      PatchInfo in{};
+      const uint32_t f = pp.base_face, b = cage.face_offsets[f], n = cage.face_size(f);
+      const uint32_t last = (1u << pp.depth) - 1;
+      for (int e = 0; e < 4; ++e) in.keys[e] = ne + f;  // inside the cage face
+      auto edge_of = [&](uint32_t corner) { return m.topo.corner_edge[b + corner % n]; };
+      if (n == 4) {
+        if (pp.v == 0) in.keys[0] = edge_of(0);
+        if (pp.u == last) in.keys[1] = edge_of(1);
+        if (pp.v == last) in.keys[2] = edge_of(2);
+        if (pp.u == 0) in.keys[3] = edge_of(3);
+      } else {  // corner c's quad: edge 0 on cage edge (c, c+1), edge 3 on (c-1, c)
+        if (pp.v == 0) in.keys[0] = edge_of(pp.corner);
+        if (pp.u == 0) in.keys[3] = edge_of(pp.corner + n - 1);
+      }
+      in.bits = uint32_t(pp.level) | uint32_t(pp.boundary & 0xF) << 8 |
+                uint32_t(pp.transition & 0xF) << 12 | uint32_t(pp.type) << 16 |
+                uint32_t(pp.crease_edge & 3) << 18;
+      in.sharpness = pp.sharpness;
+      infos.push_back(in);
+    }
+  m.max_index = 0;
+  for (const uint32_t p : table.regular_points) m.max_index = std::max(m.max_index, p);
+  for (const uint32_t p : table.gregory_points) m.max_index = std::max(m.max_index, p);
+  gl::upload(m.regular_cvs, m.regular_cap, table.regular_points.data(),
+             table.regular_points.size() * 4);
+  gl::upload(m.gregory_cvs, m.gregory_cap, table.gregory_points.data(),
+             table.gregory_points.size() * 4);
+  gl::upload(m.infos, m.infos_cap, infos.data(), infos.size() * sizeof(PatchInfo));
+}
+
+void PatchDrawer::set_patches(const PatchTable& table) {
+  Impl& m = *impl_;
+  // Checked before anything is replaced, so a refused table leaves the drawer as it was.
+  uint32_t top = 0;
+  for (const auto* pts : {&table.regular_points, &table.gregory_points})
+    for (const uint32_t p : *pts) top = std::max(top, p);
+  if (table.patch_count() && m.point_floats / 3 <= top)
+    throw InputError(fmt::format("render: {} point coordinates for patches reading point {}",
+                                 m.point_floats, top));
+  upload_patches(table);
+  gl::check("PatchDrawer::set_patches");
+}
 
 void PatchDrawer::set_points(std::span<const float> points) {
   Impl& m = *impl_;

@@ -221,6 +221,45 @@ TEST(Render, MeshFaceColoursLandWhereTheFacesAre) {
     EXPECT_EQ(px[4 * corner] + px[4 * corner + 1] + px[4 * corner + 2], 0);
 }
 
+// A view change swaps the selection from the hierarchy: after set_patches the drawer tessellates
+// exactly what a drawer built for that selection does; a table of another cage is refused and
+// leaves the drawer as it was.
+TEST(Render, SetPatchesEqualsANewDrawer) {
+  context();
+  const Mesh cage = read_mesh(kModels / "quads/bigguy.obj");
+  PatchOptions po;
+  po.subdiv = subdiv_options(cage);
+  po.depth = 4;
+  const PatchHierarchy h = build_patch_hierarchy(cage, po);
+  const std::vector<float> points = h.table.points(cage.positions);
+  const VertexErrorModel model = vertex_error_model(cage, po.subdiv);
+  const Camera far = frame_camera(cage, 640, 480);
+  Camera near = far;
+  for (int k = 0; k < 3; ++k) near.eye[k] = near.target[k] + 0.3f * (far.eye[k] - far.target[k]);
+  DepthOptions d;
+  d.max_depth = 4;
+  const PatchTable a = select_patches(h, select_depths(cage, model, far, d));
+  const PatchTable b = select_patches(h, select_depths(cage, model, near, d));
+  ASSERT_NE(a.patch_count(), b.patch_count());
+  DrawOptions o;
+  o.factor = 2;
+  PatchDrawer swapped(cage, a, points);
+  const PatchDrawer::Capture before = swapped.capture(far, o);
+  swapped.set_patches(b);
+  PatchDrawer fresh(cage, b, points);
+  const PatchDrawer::Capture got = swapped.capture(far, o), want = fresh.capture(far, o);
+  ASSERT_EQ(got.coords.size(), want.coords.size());
+  EXPECT_NE(got.coords.size(), before.coords.size());
+  EXPECT_EQ(got.positions, want.positions);
+  // Another cage's table: refused, nothing replaced.
+  const Mesh cube = make_shape("cube");
+  PatchOptions pc;
+  pc.subdiv = subdiv_options(cube);
+  pc.depth = 2;
+  EXPECT_THROW(swapped.set_patches(build_patches(cube, pc)), InputError);
+  EXPECT_EQ(swapped.capture(far, o).positions, want.positions);
+}
+
 // An octree texture painted with dabs of every blend mode at several depths (bricks, general
 // nodes, two-sided cells), over a sphere and two sheets a fraction of a leaf apart facing
 // opposite ways.

@@ -55,6 +55,11 @@ class PatchDrawer {
 
   /// Replaces the points (an animated cage: the same table, new positions). O(points).
   void set_points(std::span<const float> points);
+  /// Replaces the patches with another table of the same cage reading the same points (a new
+  /// selection from the hierarchy after a view change): only the patch arrays are uploaded; the
+  /// points, the compiled shaders and the cage's edges stay. Throws InputError when the table is
+  /// another cage's or reads past the points. O(patches).
+  void set_patches(const PatchTable& table);
   /// Draws into the bound framebuffer (RenderTarget::begin) seen by `camera`. Only the cage's
   /// per-edge screen rates are computed and uploaded per draw (O(cage edges)).
   DrawStats draw(const Camera& camera, const DrawOptions& options);
@@ -69,6 +74,7 @@ class PatchDrawer {
   Capture capture(const Camera& camera, const DrawOptions& options);
 
  private:
+  void upload_patches(const PatchTable& table);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
