@@ -6,6 +6,8 @@
 #include <bit>
 #include <cmath>
 
+#include <immintrin.h>
+
 namespace limn {
 
 namespace {
@@ -28,6 +30,30 @@ inline int side_of(uint32_t tag, const float* n) {
   if (!n || tag == 0) return 0;
   const float* d = kTags.d[tag];
   return d[0] * n[0] + d[1] * n[1] + d[2] * n[2] >= 0 ? 0 : 1;
+}
+
+using F4 = float __attribute__((vector_size(16)));
+
+// The tag directions by axis, four tags to a vector (tags 15 and 0 are zero).
+struct TagLanes {
+  F4 d[3][4];
+  TagLanes() {
+    for (int t = 0; t < 16; ++t)
+      for (int k = 0; k < 3; ++k) d[k][t / 4][t % 4] = t <= octree::kTagCount ? kTags.d[t][k] : 0;
+  }
+};
+const TagLanes kTagLanes;
+
+// Bit t set when side_of(t, n) is 1, for every tag at once: the taps of one lookup share n.
+inline uint32_t back_tags(const float* n) {
+  if (!n) return 0;
+  uint32_t back = 0;
+  for (int q = 0; q < 4; ++q) {
+    // The sum in side_of's order, lane by lane.
+    const F4 dot = kTagLanes.d[0][q] * n[0] + kTagLanes.d[1][q] * n[1] + kTagLanes.d[2][q] * n[2];
+    back |= uint32_t(_mm_movemask_ps(__m128(!(dot >= 0)))) << (4 * q);
+  }
+  return back & ~1u;  // tag 0: no direction, seen from everywhere
 }
 
 inline uint32_t octant(uint32_t x, uint32_t y, uint32_t z, int shift) {
@@ -79,6 +105,9 @@ LIMN_WALK void remember(Cache& cache, const OctreeSampler::CacheSlot& s) {
   cache.slot[0] = s;
 }
 
+// kSample false: only the level the walk ends at (a filtered lookup's leaf level); the sample is
+// not read and the result is false.
+template <bool kSample = true>
 LIMN_WALK bool walk_nearest(const uint32_t* pool, const OctreeIndex* index, Cache& cache,
                             uint32_t x, uint32_t y, uint32_t z, const float* n, Rgba8& out,
                             int* level) {
@@ -96,7 +125,14 @@ LIMN_WALK bool walk_nearest(const uint32_t* pool, const OctreeIndex* index, Cach
   if (hit >= 0) {
     if (hit > 0) std::swap(cache.slot[0], cache.slot[hit]);
     const OctreeSampler::CacheSlot& s = cache.slot[0];
-    if (s.brick) return brick_leaf(pool, s.ptr, s.level, x, y, z, n, out, level);
+    if (s.brick) {
+      if constexpr (!kSample) return *level = s.level + 2, false;
+      return brick_leaf(pool, s.ptr, s.level, x, y, z, n, out, level);
+    }
+    ptr = s.ptr, info = s.info, l = s.level;
+  } else if (const OctreeSampler::CacheSlot& s = cache.parent;
+             s.level >= 0 && (x >> (kD - s.level)) == s.x && (y >> (kD - s.level)) == s.y &&
+             (z >> (kD - s.level)) == s.z) {
     ptr = s.ptr, info = s.info, l = s.level;
   } else if (index) {
     const int il = index->level();
@@ -104,6 +140,7 @@ LIMN_WALK bool walk_nearest(const uint32_t* pool, const OctreeIndex* index, Cach
     if (e.brick) {
       remember(cache, {e.level, true, e.ptr, 0, x >> (kD - e.level), y >> (kD - e.level),
                        z >> (kD - e.level)});
+      if constexpr (!kSample) return *level = e.level + 2, false;
       return brick_leaf(pool, e.ptr, e.level, x, y, z, n, out, level);
     }
     ptr = e.ptr, info = e.info, l = e.level;
@@ -127,11 +164,14 @@ LIMN_WALK bool walk_nearest(const uint32_t* pool, const OctreeIndex* index, Cach
     if (br & bit) {
       const uint32_t w = pool[after_gen + uint32_t(std::popcount(br & below))];
       remember(cache, {l + 1, true, w, 0, x >> (kD - l - 1), y >> (kD - l - 1), z >> (kD - l - 1)});
+      cache.parent = {l, false, ptr, info, x >> (kD - l), y >> (kD - l), z >> (kD - l)};
+      if constexpr (!kSample) return *level = l + 3, false;
       return brick_leaf(pool, w, l + 1, x, y, z, n, out, level);
     }
     // A leaf of this general node: remember the node (unless it is the cached one we began at).
     if (hit < 0 || l != start_level)
       remember(cache, {l, false, ptr, info, x >> (kD - l), y >> (kD - l), z >> (kD - l)});
+    if constexpr (!kSample) return false;
     const uint32_t lf = octree::leaves(info), dbl = octree::doubles(info);
     const uint32_t base = after_gen + uint32_t(std::popcount(br)) + 1;
     const uint32_t r = uint32_t(std::popcount(lf & below));
@@ -144,45 +184,167 @@ LIMN_WALK bool walk_nearest(const uint32_t* pool, const OctreeIndex* index, Cach
   }
 }
 
+// float(i) / 255: the alpha of a tap, looked up rather than divided.
+struct UnitTable {
+  float v[256];
+  UnitTable() {
+    for (int i = 0; i < 256; ++i) v[i] = float(i) / 255.0f;
+  }
+};
+const UnitTable kUnit;
+
+// Where brick cell bits (v & 3 along axis k) land in the brick's Morton index: bit 1 picks the
+// cell at the brick's level + 1 (mask byte), bit 0 the cell inside it.
+inline uint32_t brick_bits(uint32_t v, int k) {
+  return (v >> 1 & 1u) << (3 + k) | (v & 1u) << k;
+}
+
+// Resolves the taps in `set` (corner bits) from one brick whose leaves are at the taps' level:
+// the mask and offsets are read once, each tap costs its popcounts. mb: the Morton bits of
+// each axis's two tap cells. Returns the corners that have a sample facing n.
+LIMN_WALK uint32_t brick_taps(const uint32_t* pool, uint32_t word, const uint32_t mb[3][2],
+                              uint32_t set, uint32_t back, Rgba8 col[8]) {
+  const uint32_t bp = word & ~kFlag;
+  const uint64_t mask = uint64_t(pool[bp]) | uint64_t(pool[bp + 1]) << 32;
+  uint64_t dbl = 0;
+  uint32_t base = bp + 3;
+  if (word & kFlag) dbl = uint64_t(pool[bp + 2]) | uint64_t(pool[bp + 3]) << 32, base = bp + 5;
+  const uint32_t samples = base + (uint32_t(std::popcount(mask)) + 7) / 8;
+  if (!mask) return 0;
+  uint32_t found = 0;
+  // Branch-free: whether a tap's cell is occupied is as good as random on a surface. A missing
+  // cell's rank is at most the cell count, so its tag word still lies in the block.
+  for (; set; set &= set - 1) {
+    const int corner = std::countr_zero(set);
+    const uint32_t m = mb[0][corner & 1] | mb[1][corner >> 1 & 1] | mb[2][corner >> 2];
+    const uint64_t below = (uint64_t(1) << m) - 1;
+    const uint32_t r = uint32_t(std::popcount(mask & below));
+    const uint32_t si = r + uint32_t(std::popcount(dbl & below));
+    const uint32_t tag = pool[base + r / 8] >> (4 * (r % 8)) & 15u;
+    const uint32_t side = back >> tag & 1u;
+    const uint32_t ok = uint32_t(mask >> m) & (~side | uint32_t(dbl >> m)) & 1u;
+    col[corner] = pool[bp + ((samples + si + side - bp) & (0u - ok))];
+    found |= ok << corner;
+  }
+  return found;
+}
+
 // The 8 leaf-level taps of a filtered lookup, accumulated premultiplied (acc: rgb, alpha,
-// weight), each a nearest walk sharing the cache.
+// weight). The taps are resolved first, then accumulated in corner order with the float
+// operations of one tap at a time, so the sums do not depend on how a tap was found. Taps
+// sharing a brick (at most 8 blocks of them, one when the 2x2x2 block does not cross a brick
+// boundary) are read from it together once the cache holds it; the others are nearest walks
+// sharing the cache.
 LIMN_WALK bool walk_trilinear(const uint32_t* pool, const OctreeIndex* index, Cache& cache,
                               const double u[3], int level, const float* n, float acc[5]) {
   const double cells = double(1u << level);
   int64_t i0[3];
-  double t[3];
+  double wt[3][2];
   for (int k = 0; k < 3; ++k) {
     const double g = u[k] * cells - 0.5;
     const double f = std::floor(g);
-    i0[k] = int64_t(f), t[k] = g - f;
+    i0[k] = int64_t(f), wt[k][1] = g - f, wt[k][0] = 1 - wt[k][1];
   }
   const int64_t hi = int64_t(1) << level;
   const int shift = kD - level;
   const uint32_t half = shift > 0 ? 1u << (shift - 1) : 0;
-  bool any = false;
-  for (int corner = 0; corner < 8; ++corner) {
+  Rgba8 col[8] = {};
+  uint32_t found = 0;
+  // One tap by a nearest walk. Returns the level the walk ended at, -1 when the tap is out of
+  // the cube or weighs nothing (not walked).
+  auto walk_tap = [&](int corner) __attribute__((always_inline)) {
     int64_t ic[3];
-    double w = 1;
-    for (int k = 0; k < 3; ++k) {
-      const int d = corner >> k & 1;
-      ic[k] = i0[k] + d;
-      w *= d ? t[k] : 1 - t[k];
-    }
-    if (w <= 0) continue;
-    if (ic[0] < 0 || ic[1] < 0 || ic[2] < 0 || ic[0] >= hi || ic[1] >= hi || ic[2] >= hi) continue;
+    for (int k = 0; k < 3; ++k) ic[k] = i0[k] + (corner >> k & 1);
+    if (wt[0][corner & 1] * wt[1][corner >> 1 & 1] * wt[2][corner >> 2] <= 0) return -1;
+    if (ic[0] < 0 || ic[1] < 0 || ic[2] < 0 || ic[0] >= hi || ic[1] >= hi || ic[2] >= hi) return -1;
     // The tap's centre at kMaxDepth resolution.
     const uint32_t x = (uint32_t(ic[0]) << shift) + half, y = (uint32_t(ic[1]) << shift) + half,
                    z = (uint32_t(ic[2]) << shift) + half;
-    Rgba8 c;
-    if (!walk_nearest(pool, index, cache, x, y, z, n, c, nullptr)) continue;
-    const float a = float(channel(c, 3)) / 255.0f, fw = float(w);
-    acc[0] += fw * a * float(channel(c, 0)) / 255.0f;
-    acc[1] += fw * a * float(channel(c, 1)) / 255.0f;
-    acc[2] += fw * a * float(channel(c, 2)) / 255.0f;
-    acc[3] += fw * a;
-    acc[4] += fw;
-    any = true;
+    int ended = 0;
+    if (walk_nearest(pool, index, cache, x, y, z, n, col[corner], &ended)) found |= 1u << corner;
+    return ended;
+  };
+  if (level < 2) {
+    for (int corner = 0; corner < 8; ++corner) walk_tap(corner);
+  } else {
+    // Per axis, the corners on each side of a brick boundary (all 8 on one side when the two
+    // tap cells share the brick's 4 cells along it).
+    const uint32_t back = back_tags(n);
+    static constexpr uint32_t kSide[3][2] = {{0x55, 0xaa}, {0x33, 0xcc}, {0x0f, 0xf0}};
+    uint32_t sets[3][2], mb[3][2];
+    int parts[3];
+    for (int k = 0; k < 3; ++k) {
+      const bool split = (i0[k] & 3) == 3;
+      parts[k] = split ? 2 : 1;
+      sets[k][0] = split ? kSide[k][0] : 0xffu, sets[k][1] = kSide[k][1];
+      for (int d = 0; d < 2; ++d) mb[k][d] = brick_bits(uint32_t(i0[k] + d) & 3u, k);
+    }
+    for (int ez = 0; ez < parts[2]; ++ez)
+      for (int ey = 0; ey < parts[1]; ++ey)
+        for (int ex = 0; ex < parts[0]; ++ex) {
+          uint32_t set = sets[0][ex] & sets[1][ey] & sets[2][ez];
+          // The block's brick cell; out of the cube, all its taps are.
+          const int64_t bx = (i0[0] + ex) >> 2, by = (i0[1] + ey) >> 2, bz = (i0[2] + ez) >> 2;
+          if (bx < 0 || by < 0 || bz < 0 || bx >= hi >> 2 || by >= hi >> 2 || bz >= hi >> 2)
+            continue;
+          OctreeSampler::BrickSlot& bs = cache.brick[(bx & 3) | (by & 3) << 2 | (bz & 3) << 4];
+          auto cached = [&]() __attribute__((always_inline)) {
+            return bs.level == level - 2 && int64_t(bs.x) == bx && int64_t(bs.y) == by &&
+                   int64_t(bs.z) == bz;
+          };
+          if (cached()) {
+            found |= brick_taps(pool, bs.ptr, mb, set, back, col);
+            continue;
+          }
+          // The block's node, by a walk that reads no sample: its brick, if it is one, then
+          // serves every tap.
+          {
+            Rgba8 unused;
+            int ended = 0;
+            walk_nearest<false>(pool, index, cache, uint32_t(bx << (shift + 2)),
+                                uint32_t(by << (shift + 2)), uint32_t(bz << (shift + 2)), n, unused,
+                                &ended);
+            const OctreeSampler::CacheSlot& s0 = cache.slot[0];
+            if (s0.brick && s0.level == level - 2 && int64_t(s0.x) == bx && int64_t(s0.y) == by &&
+                int64_t(s0.z) == bz) {
+              bs = {s0.level, s0.ptr, s0.x, s0.y, s0.z};
+              cache.brick_level = s0.level;
+              found |= brick_taps(pool, bs.ptr, mb, set, back, col);
+              continue;
+            }
+          }
+          while (set) {
+            const int corner = std::countr_zero(set);
+            set &= set - 1;
+            const int ended = walk_tap(corner);
+            if (ended >= 0 && ended <= level - 2) {
+              // A leaf or empty cell holding the whole brick cell: the same answer for all.
+              const uint32_t same = (found >> corner & 1) ? set : 0;
+              for (; set; set &= set - 1) col[std::countr_zero(set)] = col[corner];
+              found |= same;
+            }
+          }
+        }
   }
+  F4 sum = {acc[0], acc[1], acc[2], acc[3]};
+  float weight = acc[4];
+  bool any = false;
+  const F4 norm = {255.0f, 255.0f, 255.0f, 1.0f};
+  // Taps without a sample weigh 0: adding exact zeros leaves the sums as they were, and the
+  // branch on `found` would be as good as random.
+  for (int corner = 0; corner < 8; ++corner) {
+    const double w = wt[0][corner & 1] * wt[1][corner >> 1 & 1] * wt[2][corner >> 2];
+    const bool tap = (found >> corner & 1) && w > 0;
+    const Rgba8 c = col[corner];
+    const float fw = tap ? float(w) : 0.0f, wa = fw * kUnit.v[channel(c, 3)];
+    const F4 ch = {float(channel(c, 0)), float(channel(c, 1)), float(channel(c, 2)), 1.0f};
+    // Lane by lane what one tap did before: fw * a * channel / 255 (and fw * a for alpha).
+    sum += (F4{wa, wa, wa, wa} * ch) / norm;
+    weight += fw;
+    any |= tap;
+  }
+  for (int k = 0; k < 4; ++k) acc[k] = sum[k];
+  acc[4] = weight;
   return any;
 }
 
@@ -196,6 +358,44 @@ __attribute__((target("popcnt"))) bool walk_trilinear_popcnt(const uint32_t* poo
 bool walk_trilinear_generic(const uint32_t* pool, const OctreeIndex* index, Cache& cache,
                             const double u[3], int level, const float* n, float acc[5]) {
   return walk_trilinear(pool, index, cache, u, level, n, acc);
+}
+
+// A filtered lookup at p's leaf level: finds the level (a walk that reads no sample, leaving p's
+// node first in the cache for the taps), then, unless the footprint is wider than a leaf,
+// accumulates the taps. Returns -1 when the footprint asks for mip levels instead.
+LIMN_WALK int walk_filtered(const uint32_t* pool, const OctreeIndex* index, Cache& cache,
+                            const uint32_t c[3], const double u[3], const float* n, float footprint,
+                            double size, int& leaf_level, float acc[5]) {
+  // p's brick is usually one the last lookup's taps read: then its leaves are p's level.
+  const int b = cache.brick_level;
+  const OctreeSampler::BrickSlot& bs =
+      cache.brick[(c[0] >> (kD - b) & 3) | (c[1] >> (kD - b) & 3) << 2 |
+                  (c[2] >> (kD - b) & 3) << 4];
+  if (b >= 0 && bs.level == b && bs.x == c[0] >> (kD - b) && bs.y == c[1] >> (kD - b) &&
+      bs.z == c[2] >> (kD - b)) {
+    leaf_level = b + 2;
+  } else {
+    Rgba8 unused;
+    walk_nearest<false>(pool, index, cache, c[0], c[1], c[2], n, unused, &leaf_level);
+  }
+  const double leaf_size = size / double(1u << leaf_level);
+  if (footprint > leaf_size && std::isfinite(footprint)) return -1;
+  return walk_trilinear(pool, index, cache, u, leaf_level, n, acc);
+}
+
+__attribute__((target("popcnt"))) int walk_filtered_popcnt(const uint32_t* pool,
+                                                           const OctreeIndex* index, Cache& cache,
+                                                           const uint32_t c[3], const double u[3],
+                                                           const float* n, float footprint,
+                                                           double size, int& leaf_level,
+                                                           float acc[5]) {
+  return walk_filtered(pool, index, cache, c, u, n, footprint, size, leaf_level, acc);
+}
+
+int walk_filtered_generic(const uint32_t* pool, const OctreeIndex* index, Cache& cache,
+                          const uint32_t c[3], const double u[3], const float* n, float footprint,
+                          double size, int& leaf_level, float acc[5]) {
+  return walk_filtered(pool, index, cache, c, u, n, footprint, size, leaf_level, acc);
 }
 
 __attribute__((target("popcnt"))) bool walk_nearest_popcnt(const uint32_t* pool,
@@ -402,17 +602,24 @@ bool OctreeSampler::trilinear(const double u[3], int level, const float* n, bool
 bool OctreeSampler::filtered(const float p[3], const float* n, float footprint, float rgba[4]) {
   rgba[0] = rgba[1] = rgba[2] = rgba[3] = 0;
   double u[3];
-  for (int k = 0; k < 3; ++k) u[k] = (double(p[k]) - origin_[k]) * scale_ / double(1u << kD);
-  if (!(u[0] >= 0 && u[0] < 1 && u[1] >= 0 && u[1] < 1 && u[2] >= 0 && u[2] < 1)) return false;
-  Rgba8 c;
+  uint32_t c[3];
+  for (int k = 0; k < 3; ++k) {
+    // The cell nearest() would find: u scaled back by a power of two, exactly.
+    const double v = (double(p[k]) - origin_[k]) * scale_;
+    u[k] = v / double(1u << kD);
+    if (!(u[k] >= 0 && u[k] < 1)) return false;
+    c[k] = uint32_t(v);
+  }
   int leaf_level = 0;
-  nearest(p, n, c, &leaf_level);
   float acc[5] = {0, 0, 0, 0, 0};
-  bool any;
-  const double leaf_size = double(t_->size()) / double(1u << leaf_level);
-  if (!(footprint > leaf_size) || !std::isfinite(footprint)) {
-    any = trilinear(u, leaf_level, n, false, acc);
-  } else {
+  const uint32_t* pool = t_->words().data();
+  const double size = double(t_->size());
+  int at_leaf =
+      kPopcnt
+          ? walk_filtered_popcnt(pool, index_, cache_, c, u, n, footprint, size, leaf_level, acc)
+          : walk_filtered_generic(pool, index_, cache_, c, u, n, footprint, size, leaf_level, acc);
+  bool any = at_leaf > 0;
+  if (at_leaf < 0) {
     const double lf =
         std::clamp(std::log2(double(t_->size()) / double(footprint)), 0.0, double(leaf_level));
     const int l0 = int(std::floor(lf));

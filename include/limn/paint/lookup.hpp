@@ -83,10 +83,23 @@ class OctreeSampler {
     bool brick = false;
     uint32_t ptr = 0, info = 0, x = 0, y = 0, z = 0;
   };
-  /// The last four nodes reached, most recent first: the 8 taps of a filtered lookup straddle
-  /// up to a few bricks, and one slot would thrash between them.
+  /// A brick a filtered lookup read its taps from, by its cell (ptr: the brick word).
+  struct BrickSlot {
+    int level = -1;
+    uint32_t ptr = 0, x = 0, y = 0, z = 0;
+  };
   struct Cache {
+    /// The last four nodes reached, most recent first: the 8 taps of a filtered lookup
+    /// straddle up to a few bricks, and one slot would thrash between them.
     CacheSlot slot[4];
+    /// Bricks by the low two bits of their cell's coordinates: the up to 8 bricks a filtered
+    /// lookup's taps straddle, and their neighbours along a coherent path, without evicting
+    /// each other (four slots keep one brick in two a lookup needs in Morton order).
+    BrickSlot brick[64];
+    int brick_level = -1;  ///< the level of the last brick put in `brick`
+    /// The general node the last walk into a brick came through: its other bricks are one
+    /// step away when a coherent path leaves the cached ones.
+    CacheSlot parent;
   };
 
  private:
