@@ -334,7 +334,7 @@ LIMN_WALK bool walk_trilinear(const uint32_t* pool, const OctreeIndex* index, Ca
   // branch on `found` would be as good as random.
   for (int corner = 0; corner < 8; ++corner) {
     const double w = wt[0][corner & 1] * wt[1][corner >> 1 & 1] * wt[2][corner >> 2];
-    const bool tap = (found >> corner & 1) && w > 0;
+    const bool tap = (found >> corner & 1) & (w > 0);
     const Rgba8 c = col[corner];
     const float fw = tap ? float(w) : 0.0f, wa = fw * kUnit.v[channel(c, 3)];
     const F4 ch = {float(channel(c, 0)), float(channel(c, 1)), float(channel(c, 2)), 1.0f};
