@@ -10,18 +10,7 @@
 namespace limn::cli {
 
 Camera parse_camera(const std::string& s, Camera c) {
-  std::vector<float> v;
-  std::stringstream in(s);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    try {
-      size_t used = 0;
-      v.push_back(std::stof(item, &used));
-      if (used != item.size()) throw std::invalid_argument(item);
-    } catch (const std::exception&) {
-      throw InputError(fmt::format("--camera {}: '{}' is not a number", s, item));
-    }
-  }
+  std::vector<float> v = parse_numbers(s, "--camera");
   if (v.size() != 7 || !(v[6] > 0 && v[6] < 180))
     throw InputError(
         fmt::format("--camera {}: expected ex,ey,ez,tx,ty,tz,fovy_deg (0 < fovy < 180)", s));

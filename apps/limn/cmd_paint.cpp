@@ -22,18 +22,7 @@ struct PaintOpts {
 };
 
 Rgba8 parse_color(const std::string& s, const char* option) {
-  std::vector<float> v;
-  std::stringstream in(s);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    try {
-      size_t used = 0;
-      v.push_back(std::stof(item, &used));
-      if (used != item.size()) throw std::invalid_argument(item);
-    } catch (const std::exception&) {
-      throw InputError(fmt::format("{} {}: '{}' is not a number", option, s, item));
-    }
-  }
+  std::vector<float> v = parse_numbers(s, option);
   if (v.size() == 3) v.push_back(1.0f);
   if (v.size() != 4)
     throw InputError(fmt::format("{} {}: expected r,g,b[,a] with numbers in [0, 1]", option, s));

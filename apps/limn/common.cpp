@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <sstream>
+
 namespace limn::cli {
 
 MeshFormat parse_format_option(const std::string& value, const char* option) {
@@ -94,6 +96,22 @@ std::string stats_text(const MeshStats& s) {
                      s.has_normals ? "yes" : "no", s.has_uvs ? "yes" : "no",
                      s.has_colors ? "yes" : "no");
   return out;
+}
+
+std::vector<float> parse_numbers(const std::string& s, const char* option) {
+  std::vector<float> v;
+  std::stringstream in(s);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    try {
+      size_t used = 0;
+      v.push_back(std::stof(item, &used));
+      if (used != item.size()) throw std::invalid_argument(item);
+    } catch (const std::exception&) {
+      throw InputError(fmt::format("{} {}: '{}' is not a number", option, s, item));
+    }
+  }
+  return v;
 }
 
 }  // namespace limn::cli

@@ -43,6 +43,9 @@ class Stopwatch {
 /// `--format` values accepted for input/output overrides.
 MeshFormat parse_format_option(const std::string& value, const char* option);
 
+/// "a,b,c,..." -> numbers; InputError "OPTION S: 'item' is not a number" for any other item.
+std::vector<float> parse_numbers(const std::string& s, const char* option);
+
 nlohmann::json stats_json(const MeshStats& s);
 /// Human-readable multi-line summary of the stats.
 std::string stats_text(const MeshStats& s);

@@ -85,6 +85,28 @@ void upload(Buffer& b, size_t& capacity, const void* data, size_t bytes) {
   if (bytes) glNamedBufferSubData(b.get(), 0, GLsizeiptr(bytes), data);
 }
 
+DrawQueries::DrawQueries() {
+  GLuint n = 0;
+  glCreateQueries(GL_TIME_ELAPSED, 1, &n);
+  time_ = Query(n);
+  glCreateQueries(GL_PRIMITIVES_GENERATED, 1, &n);
+  primitives_ = Query(n);
+}
+
+void DrawQueries::begin() {
+  glBeginQuery(GL_TIME_ELAPSED, time_.get());
+  glBeginQuery(GL_PRIMITIVES_GENERATED, primitives_.get());
+}
+
+std::pair<GLuint64, GLuint64> DrawQueries::end() {
+  glEndQuery(GL_PRIMITIVES_GENERATED);
+  glEndQuery(GL_TIME_ELAPSED);
+  GLuint64 ns = 0, prims = 0;
+  glGetQueryObjectui64v(time_.get(), GL_QUERY_RESULT, &ns);
+  glGetQueryObjectui64v(primitives_.get(), GL_QUERY_RESULT, &prims);
+  return {ns, prims};
+}
+
 void check(std::string_view where) {
   const GLenum e = glGetError();
   if (e != GL_NO_ERROR)

@@ -59,6 +59,19 @@ Buffer buffer(const void* data, size_t bytes, bool dynamic = false);
 /// Replaces a buffer's contents, growing it when needed.
 void upload(Buffer& b, size_t& capacity, const void* data, size_t bytes);
 
+/// GPU time and primitives of the draws issued between `begin` and `end` (a timer query and a
+/// primitives-generated query); `end` waits for both results.
+class DrawQueries {
+ public:
+  DrawQueries();
+  void begin();
+  /// GPU nanoseconds and primitives generated since `begin`.
+  std::pair<GLuint64, GLuint64> end();
+
+ private:
+  Query time_, primitives_;
+};
+
 /// Throws std::runtime_error naming `where` when GL reports an error.
 void check(std::string_view where);
 

@@ -116,7 +116,7 @@ struct MeshDrawer::Impl {
   gl::Program program;
   gl::Buffer vertices;
   gl::VertexArray vao;
-  gl::Query time_query, primitives_query;
+  gl::DrawQueries queries;
   size_t count = 0, faces = 0;
   bool has_colors = false;
   Box bounds;
@@ -186,10 +186,6 @@ MeshDrawer::MeshDrawer(const Mesh& mesh, std::span<const float> face_colors, boo
   const std::string fs =
       std::string("#version 450 core\n") + gl::kShadeGlsl + gl::kOctreeGlsl + kFragment;
   m.program = gl::program("mesh", {{GL_VERTEX_SHADER, kVertex}, {GL_FRAGMENT_SHADER, fs}});
-  glCreateQueries(GL_TIME_ELAPSED, 1, &n);
-  m.time_query = gl::Query(n);
-  glCreateQueries(GL_PRIMITIVES_GENERATED, 1, &n);
-  m.primitives_query = gl::Query(n);
   gl::check("MeshDrawer");
 }
 
@@ -213,14 +209,9 @@ DrawStats MeshDrawer::draw(const Camera& camera, const DrawOptions& o) {
   glBindVertexArray(m.vao.get());
   // Without colours of its own the mesh takes the options' colour (a constant attribute).
   if (!m.has_colors) glDisableVertexArrayAttrib(m.vao.get(), 2), glVertexAttrib3fv(2, o.color);
-  glBeginQuery(GL_TIME_ELAPSED, m.time_query.get());
-  glBeginQuery(GL_PRIMITIVES_GENERATED, m.primitives_query.get());
+  m.queries.begin();
   glDrawArrays(GL_TRIANGLES, 0, GLsizei(m.count));
-  glEndQuery(GL_PRIMITIVES_GENERATED);
-  glEndQuery(GL_TIME_ELAPSED);
-  GLuint64 ns = 0, prims = 0;
-  glGetQueryObjectui64v(m.time_query.get(), GL_QUERY_RESULT, &ns);
-  glGetQueryObjectui64v(m.primitives_query.get(), GL_QUERY_RESULT, &prims);
+  const auto [ns, prims] = m.queries.end();
   glBindVertexArray(0);
   glUseProgram(0);
   gl::check("MeshDrawer::draw");

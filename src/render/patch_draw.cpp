@@ -323,7 +323,7 @@ struct PatchDrawer::Impl {
   gl::Buffer points, regular_cvs, gregory_cvs, infos, lines;
   size_t points_cap = 0, lines_cap = 0, regular_cap = 0, gregory_cap = 0, infos_cap = 0;
   gl::VertexArray vao;
-  gl::Query time_query, primitives_query;
+  gl::DrawQueries queries;
   gl::Framebuffer capture_fbo;
   gl::Renderbuffer capture_rb;
   std::vector<float> rates;
@@ -359,10 +359,6 @@ PatchDrawer::PatchDrawer(const Mesh& cage, const PatchTable& table, std::span<co
   GLuint n = 0;
   glCreateVertexArrays(1, &n);
   m.vao = gl::VertexArray(n);
-  glCreateQueries(GL_TIME_ELAPSED, 1, &n);
-  m.time_query = gl::Query(n);
-  glCreateQueries(GL_PRIMITIVES_GENERATED, 1, &n);
-  m.primitives_query = gl::Query(n);
   if (std::string(reinterpret_cast<const char*>(glGetString(GL_RENDERER))).find("llvmpipe") !=
       std::string::npos)
     m.chunk = 32;
@@ -461,8 +457,7 @@ DrawStats PatchDrawer::draw(const Camera& camera, const DrawOptions& o) {
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, m.points.get());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, m.infos.get());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, m.lines.get());
-  glBeginQuery(GL_TIME_ELAPSED, m.time_query.get());
-  glBeginQuery(GL_PRIMITIVES_GENERATED, m.primitives_query.get());
+  m.queries.begin();
   for (int pass = 0; pass < 2; ++pass) {
     const size_t count = pass ? m.gregory : m.regular;
     if (!count) continue;
@@ -487,11 +482,7 @@ DrawStats PatchDrawer::draw(const Camera& camera, const DrawOptions& o) {
       glDrawArrays(GL_PATCHES, GLint(first * size_t(cvs)),
                    GLsizei(std::min(m.chunk, count - first) * size_t(cvs)));
   }
-  glEndQuery(GL_PRIMITIVES_GENERATED);
-  glEndQuery(GL_TIME_ELAPSED);
-  GLuint64 ns = 0, prims = 0;
-  glGetQueryObjectui64v(m.time_query.get(), GL_QUERY_RESULT, &ns);
-  glGetQueryObjectui64v(m.primitives_query.get(), GL_QUERY_RESULT, &prims);
+  const auto [ns, prims] = m.queries.end();
   glBindVertexArray(0);
   glUseProgram(0);
   gl::check("PatchDrawer::draw");
