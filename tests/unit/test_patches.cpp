@@ -74,9 +74,12 @@ struct Comparison {
   std::string worst;
 };
 
+// `oracle_cage`: OpenSubdiv refines this cage instead (the same cage with other hole tags);
+// only the ptex faces limn covers are compared.
 Comparison compare_with_osd(const Mesh& cage, int depth, const SubdivOptions& options,
-                            bool inf_sharp = false) {
-  const OsdAdaptive ref = osd_adaptive(cage, depth, options, inf_sharp);
+                            bool inf_sharp = false, const Mesh* oracle_cage = nullptr) {
+  const OsdAdaptive ref =
+      osd_adaptive(oracle_cage ? *oracle_cage : cage, depth, options, inf_sharp);
   PatchOptions po;
   po.subdiv = options;
   po.depth = depth;
@@ -84,7 +87,12 @@ Comparison compare_with_osd(const Mesh& cage, int depth, const SubdivOptions& op
   po.single_crease_patches = false;  // OpenSubdiv's CPU evaluation ignores crease sharpness
   const PatchTable table = build_patches(cage, po);
   EXPECT_EQ(int(table.ptex_count), ref.ptex_faces);
-  EXPECT_EQ(int(table.patch_count()), ref.table->GetNumPatchesTotal());
+  if (!oracle_cage) {
+    EXPECT_EQ(int(table.patch_count()), ref.table->GetNumPatchesTotal());
+  }
+  std::vector<uint8_t> covered(table.ptex_count, 0);
+  for (const auto* params : {&table.regular_params, &table.gregory_params})
+    for (const PatchParam& p : *params) covered[p.ptex] = 1;
   const std::vector<float> pts = table.points(cage.positions);
   const PatchMap map(table);
   const osd::Far::PatchMap osd_map(*ref.table);
@@ -94,30 +102,31 @@ Comparison compare_with_osd(const Mesh& cage, int depth, const SubdivOptions& op
   std::vector<double> expected, expected_n;
   std::vector<std::string> where;
   for (uint32_t ptex = 0; ptex < table.ptex_count; ++ptex)
-    for (double u : kUV)
-      for (double v : kUV) {
-        const osd::Far::PatchTable::PatchHandle* h = osd_map.FindPatch(int(ptex), u, v);
-        if (!h) continue;  // a hole
-        double wp[20], wu[20], wv[20];
-        ref.table->EvaluateBasis(*h, u, v, wp, wu, wv);
-        const auto cvs = ref.table->GetPatchVertices(*h);
-        double p[3] = {}, du[3] = {}, dv[3] = {};
-        for (int i = 0; i < cvs.size(); ++i) {
-          const test::OsdPoint& q = ref.points[size_t(cvs[i])];
-          const double c[3] = {q.x, q.y, q.z};
-          for (int k = 0; k < 3; ++k)
-            p[k] += wp[i] * c[k], du[k] += wu[i] * c[k], dv[k] += wv[i] * c[k];
+    if (covered[ptex])
+      for (double u : kUV)
+        for (double v : kUV) {
+          const osd::Far::PatchTable::PatchHandle* h = osd_map.FindPatch(int(ptex), u, v);
+          if (!h) continue;  // a hole
+          double wp[20], wu[20], wv[20];
+          ref.table->EvaluateBasis(*h, u, v, wp, wu, wv);
+          const auto cvs = ref.table->GetPatchVertices(*h);
+          double p[3] = {}, du[3] = {}, dv[3] = {};
+          for (int i = 0; i < cvs.size(); ++i) {
+            const test::OsdPoint& q = ref.points[size_t(cvs[i])];
+            const double c[3] = {q.x, q.y, q.z};
+            for (int k = 0; k < 3; ++k)
+              p[k] += wp[i] * c[k], du[k] += wu[i] * c[k], dv[k] += wv[i] * c[k];
+          }
+          coords.push_back(map.find(ptex, u, v));
+          expected.insert(expected.end(), p, p + 3);
+          double n[3] = {du[1] * dv[2] - du[2] * dv[1], du[2] * dv[0] - du[0] * dv[2],
+                         du[0] * dv[1] - du[1] * dv[0]};
+          const double l = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+          for (double& x : n) x = l > 0 ? x / l : 0.0;
+          expected_n.insert(expected_n.end(), n, n + 3);
+          where.push_back("ptex " + std::to_string(ptex) + " u " + std::to_string(u) + " v " +
+                          std::to_string(v));
         }
-        coords.push_back(map.find(ptex, u, v));
-        expected.insert(expected.end(), p, p + 3);
-        double n[3] = {du[1] * dv[2] - du[2] * dv[1], du[2] * dv[0] - du[0] * dv[2],
-                       du[0] * dv[1] - du[1] * dv[0]};
-        const double l = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-        for (double& x : n) x = l > 0 ? x / l : 0.0;
-        expected_n.insert(expected_n.end(), n, n + 3);
-        where.push_back("ptex " + std::to_string(ptex) + " u " + std::to_string(u) + " v " +
-                        std::to_string(v));
-      }
   std::vector<float> pos(3 * coords.size()), du(pos.size()), dv(pos.size());
   evaluate_patches(table, pts, coords, pos.data(), du.data(), dv.data());
   const double diag = bbox_diagonal(cage);
@@ -165,11 +174,15 @@ TEST(Patches, ProceduralShapesMatchOpenSubdiv) {
   }
 }
 
-// Random cages: every boundary and crease rule, semi-sharp creases and corners, n-gons. Known
-// gap: where a hole face touches the ring of an end cap next to a non-quad face, OpenSubdiv's
-// end cap differs slightly (2e-4 of the diagonal in one of these cages); without holes the
-// cages agree to 1e-5, with them to 1e-3.
+// Random cages: every boundary and crease rule, semi-sharp creases and corners, n-gons, holes.
+// A hole removes its face's surface and changes no other face's (OpenSubdiv's definition: its
+// uniform limit is the same with and without the hole tags), so the faces limn keeps must equal
+// OpenSubdiv's surface of the cage without holes to 1e-5. OpenSubdiv's own adaptive table with
+// the holes strays from that (2e-4 of the diagonal in one of these cages: an end cap whose ring
+// touches a hole beside non-quads, at a crease); limn's does not, so against it the bound is
+// looser.
 TEST(Patches, RandomCagesMatchOpenSubdiv) {
+  int with_holes = 0;
   for (int i = 0; i < 60; ++i) {
     Mesh cage = test::random_cage(20261201 + uint64_t(i / 2));
     const bool holes = i % 2 == 1;
@@ -180,15 +193,26 @@ TEST(Patches, RandomCagesMatchOpenSubdiv) {
     o.crease_method = j % 3 == 0 ? CreaseMethod::chaikin : CreaseMethod::uniform;
     const int depth = 1 + j % 3;
     Comparison c;
+    const bool inf = j % 4 >= 2;  // half with infinitely sharp patches
     try {
-      c = compare_with_osd(cage, depth, o, j % 4 >= 2);  // half with infinitely sharp patches
+      c = compare_with_osd(cage, depth, o, inf);
     } catch (const InputError&) {
       continue;  // a cage limn rejects (checked elsewhere)
     }
     EXPECT_LT(c.max_position, holes ? 1e-3 : 1e-5)
         << "cage " << i << " depth " << depth << " " << c.worst;
     EXPECT_LT(c.max_normal, holes ? 1e-2 : 1e-3) << "cage " << i;
+    if (holes) {
+      Mesh whole = cage;
+      whole.hole_faces.clear();
+      const Comparison w = compare_with_osd(cage, depth, o, inf, &whole);
+      EXPECT_GT(w.samples, 0u);
+      EXPECT_LT(w.max_position, 1e-5) << "cage " << i << " depth " << depth << " " << w.worst;
+      EXPECT_LT(w.max_normal, 1e-3) << "cage " << i;
+      ++with_holes;
+    }
   }
+  EXPECT_GE(with_holes, 20);
 }
 
 // The grid evaluator (no lookups, 8 points at a time) gives what PatchMap::find and
