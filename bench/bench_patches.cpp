@@ -12,12 +12,14 @@
 // --keep-heap: glibc keeps freed memory (no trimming, no mmap below 32 MB), so neither side pays
 // the kernel for fresh pages after the first runs: what a long-running application with a
 // caching allocator sees, and the compute-only comparison.
+// --regions N: limn isolates regions of about N faces (PatchOptions::batch_faces) at any cage
+// size, instead of only above 32,768 faces.
 // limn_MB / osd_MB: the peak heap of one build (bytes held through operator new at once, the
 // result included), counted by this program's own operator new.
 // limn_pf / osd_pf: the median minor page faults of one build (fresh pages from the kernel; on
 // this machine's virtualised kernel each costs ~10-20 us, so they can be most of the time).
 //   limn_bench_patches [--repeat N] [--models DIR] [--depths 2,3,4,6] [--special] [--mesh PATH]
-//                      [--limn-only] [--peak] [--batched] [--keep-heap]
+//                      [--limn-only] [--peak] [--batched] [--keep-heap] [--regions N]
 #include <fmt/format.h>
 #include <tbb/global_control.h>
 
@@ -153,6 +155,7 @@ int main(int argc, char** argv) {
   std::vector<int> depths = {2, 3, 4, 6};
   std::vector<fs::path> paths;
   bool limn_only = false, peak = false, batched = false;
+  uint32_t batch_faces = 0;  // limn's region size (0: its default)
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--repeat") && i + 1 < argc)
       repeat = std::max(1, std::atoi(argv[++i]));
@@ -162,6 +165,8 @@ int main(int argc, char** argv) {
       paths.emplace_back(argv[++i]);
     else if (!std::strcmp(argv[i], "--limn-only"))
       limn_only = true;
+    else if (!std::strcmp(argv[i], "--regions") && i + 1 < argc)
+      batch_faces = uint32_t(std::max(0, std::atoi(argv[++i])));
     else if (!std::strcmp(argv[i], "--batched"))
       batched = true;
     else if (!std::strcmp(argv[i], "--peak"))
@@ -201,6 +206,7 @@ int main(int argc, char** argv) {
         limn::PatchOptions opt;
         opt.subdiv = limn::subdiv_options(m);
         opt.depth = depth;
+        opt.batch_faces = batch_faces;
         opt.inf_sharp_patches = opt.single_crease_patches = special;  // as the OpenSubdiv side
         const double f0 = minor_faults(), t0 = now_ms();
         hl = heap_peak_mb([&] {
