@@ -12,6 +12,10 @@
 // --keep-heap: glibc keeps freed memory (no trimming, no mmap below 32 MB), so neither side pays
 // the kernel for fresh pages after the first runs: what a long-running application with a
 // caching allocator sees, and the compute-only comparison.
+// --rss: every build runs in a child process of its own (forked after loading the cage), and the
+// last two columns are each build's peak resident growth in MB (the kernel's peak RSS, reset at
+// the start of the build, less the resident size then): the physical memory it took, as
+// /usr/bin/time would count it, instead of page faults.
 // --regions N: limn isolates regions of about N faces (PatchOptions::batch_faces) at any cage
 // size, instead of only above 32,768 faces.
 // limn_MB / osd_MB: the peak heap of one build (bytes held through operator new at once, the
@@ -19,12 +23,14 @@
 // limn_pf / osd_pf: the median minor page faults of one build (fresh pages from the kernel; on
 // this machine's virtualised kernel each costs ~10-20 us, so they can be most of the time).
 //   limn_bench_patches [--repeat N] [--models DIR] [--depths 2,3,4,6] [--special] [--mesh PATH]
-//                      [--limn-only] [--peak] [--batched] [--keep-heap] [--regions N]
+//                      [--limn-only] [--peak] [--batched] [--keep-heap] [--regions N] [--rss]
 #include <fmt/format.h>
 #include <tbb/global_control.h>
 
 #include <malloc.h>
 #include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
@@ -33,6 +39,8 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <functional>
 #include <new>
 #include <string>
 #include <vector>
@@ -127,6 +135,48 @@ double peak_gb() {
   return double(u.ru_maxrss) * 1024.0 / 1e9;
 }
 
+// A field of /proc/self/status in MB ("VmRSS", "VmHWM": current and peak resident memory).
+double status_mb(const char* field) {
+  std::ifstream in("/proc/self/status");
+  std::string line;
+  const size_t n = std::strlen(field);
+  while (std::getline(in, line))
+    if (line.compare(0, n, field) == 0 && line.size() > n && line[n] == ':')
+      return std::atof(line.c_str() + n + 1) * 1024.0 / 1e6;  // kB
+  return 0;
+}
+
+// One build in a child process of its own (the heap as the parent left it, no pages either side
+// returned): its time, patches and peak resident growth (the kernel's peak RSS, reset at the
+// start, less the resident memory then), the physical memory the build took.
+struct Forked {
+  double ms = 0, rss_mb = 0, heap_mb = 0;
+  size_t patches = 0;
+  bool ok = false;
+};
+Forked run_forked(const std::function<void(Forked&)>& build) {
+  int fd[2];
+  if (pipe(fd) != 0) return {};
+  const pid_t pid = fork();
+  if (pid == 0) {
+    close(fd[0]);
+    { std::ofstream("/proc/self/clear_refs") << "5"; }  // reset the peak to the current size
+    const double before = status_mb("VmRSS");
+    Forked r;
+    build(r);
+    r.rss_mb = status_mb("VmHWM") - before;
+    r.ok = true;
+    const ssize_t w = write(fd[1], &r, sizeof r);
+    _exit(w == ssize_t(sizeof r) ? 0 : 1);
+  }
+  close(fd[1]);
+  Forked r;
+  if (pid < 0 || read(fd[0], &r, sizeof r) != ssize_t(sizeof r)) r = {};
+  close(fd[0]);
+  if (pid > 0) waitpid(pid, nullptr, 0);
+  return r;
+}
+
 }  // namespace
 
 void* operator new(size_t n) {
@@ -154,7 +204,7 @@ int main(int argc, char** argv) {
   fs::path models = LIMN_SHARED_MODELS;
   std::vector<int> depths = {2, 3, 4, 6};
   std::vector<fs::path> paths;
-  bool limn_only = false, peak = false, batched = false;
+  bool limn_only = false, peak = false, batched = false, rss = false;
   uint32_t batch_faces = 0;  // limn's region size (0: its default)
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--repeat") && i + 1 < argc)
@@ -169,6 +219,8 @@ int main(int argc, char** argv) {
       batch_faces = uint32_t(std::max(0, std::atoi(argv[++i])));
     else if (!std::strcmp(argv[i], "--batched"))
       batched = true;
+    else if (!std::strcmp(argv[i], "--rss"))
+      rss = true;
     else if (!std::strcmp(argv[i], "--peak"))
       peak = true;
     else if (!std::strcmp(argv[i], "--keep-heap"))
@@ -189,7 +241,7 @@ int main(int argc, char** argv) {
                          "osd/catmark_pole360.obj"};
   fmt::print("{:<22} {:>5} {:>10} {:>10} {:>10} {:>10} {:>8} {:>8} {:>8} {:>8} {:>8}\n", "model",
              "depth", "limn_patch", "osd_patch", "limn_ms", "osd_ms", "osd/limn", "limn_MB",
-             "osd_MB", "limn_pf", "osd_pf");
+             "osd_MB", rss ? "limn_RSS" : "limn_pf", rss ? "osd_RSS" : "osd_pf");
   if (paths.empty())
     for (const char* name : names) paths.push_back(models / name);
   for (const fs::path& path : paths) {
@@ -199,33 +251,52 @@ int main(int argc, char** argv) {
     }
     const limn::Mesh m = limn::read_mesh(path);
     for (int depth : depths) {
-      std::vector<double> tl, to, fl, fo;
+      std::vector<double> tl, to, fl, fo, rl, ro;
       size_t pl = 0, po = 0;
       double hl = 0, ho = 0;  // peak heap MB (the same every run)
-      auto run_limn = [&] {
+      auto limn_once = [&](Forked& r) {
         limn::PatchOptions opt;
         opt.subdiv = limn::subdiv_options(m);
         opt.depth = depth;
         opt.batch_faces = batch_faces;
         opt.inf_sharp_patches = opt.single_crease_patches = special;  // as the OpenSubdiv side
-        const double f0 = minor_faults(), t0 = now_ms();
-        hl = heap_peak_mb([&] {
+        const double t0 = now_ms();
+        r.heap_mb = heap_peak_mb([&] {
           const limn::PatchTable t = limn::build_patches(m, opt);
-          tl.push_back(now_ms() - t0);
-          pl = t.patch_count();
+          r.ms = now_ms() - t0;
+          r.patches = t.patch_count();
         });
-        fl.push_back(minor_faults() - f0);
+      };
+      auto osd_once = [&](Forked& r) {
+        OsdResult o;
+        r.heap_mb = heap_peak_mb([&] { o = osd_build(m, depth, special); });
+        r.ms = o.ms, r.patches = o.patches;
+      };
+      // One build of a side, here or (--rss) in a child process.
+      auto once = [&](const std::function<void(Forked&)>& build, std::vector<double>& t,
+                      std::vector<double>& f, std::vector<double>& res, size_t& patches,
+                      double& heap) {
+        const double f0 = minor_faults();
+        Forked r;
+        if (rss) {
+          r = run_forked(build);
+          if (!r.ok) throw std::runtime_error("a forked build failed");
+          res.push_back(r.rss_mb);
+        } else {
+          build(r);
+          f.push_back(minor_faults() - f0);
+        }
+        t.push_back(r.ms), patches = r.patches, heap = r.heap_mb;
+        return r.ms;
+      };
+      auto run_limn = [&] {
+        once(limn_once, tl, fl, rl, pl, hl);
         if (peak) fmt::print("  peak RSS after limn: {:.2f} GB\n", peak_gb());
       };
       auto run_osd = [&] {
-        const double f0 = minor_faults();
-        OsdResult o;
-        ho = heap_peak_mb([&] { o = osd_build(m, depth, special); });
-        fo.push_back(minor_faults() - f0);
-        to.push_back(o.ms);
-        po = o.patches;
+        const double ms = once(osd_once, to, fo, ro, po, ho);
         if (peak) fmt::print("  peak RSS after OpenSubdiv: {:.2f} GB\n", peak_gb());
-        return o.ms <= 5000;  // OpenSubdiv's high-valence pathology: one run says enough
+        return ms <= 5000;  // OpenSubdiv's high-valence pathology: one run says enough
       };
       if (batched) {  // each side's runs in a row: each finds the heap its own last run left
         for (int k = 0; k < repeat; ++k) run_limn();
@@ -238,11 +309,13 @@ int main(int argc, char** argv) {
         }
       }
       const double ml = median(tl), mo = to.empty() ? 0.0 : median(to);
+      auto med = [](const std::vector<double>& v) { return v.empty() ? 0.0 : median(v); };
+      // --rss: the last two columns are each side's peak resident growth (MB), not faults.
       fmt::print(
-          "{:<22} {:>5} {:>10} {:>10} {:>10.2f} {:>10.2f} {:>7.2f}x {:>8.2f} {:>8.2f} {:>8.0f} "
-          "{:>8.0f}\n",
-          path.filename().string(), depth, pl, po, ml, mo, mo / ml, hl, ho, median(fl),
-          fo.empty() ? 0.0 : median(fo));
+          "{:<22} {:>5} {:>10} {:>10} {:>10.2f} {:>10.2f} {:>7.2f}x {:>8.2f} {:>8.2f} {:>8.{}f} "
+          "{:>8.{}f}\n",
+          path.filename().string(), depth, pl, po, ml, mo, mo / ml, hl, ho, rss ? med(rl) : med(fl),
+          rss ? 2 : 0, rss ? med(ro) : med(fo), rss ? 2 : 0);
       std::fflush(stdout);
     }
   }
