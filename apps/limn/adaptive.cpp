@@ -9,6 +9,33 @@
 
 namespace limn::cli {
 
+void add_adaptive_options(CLI::App& cmd, AdaptiveOpts& a, bool render) {
+  cmd.add_option("--depth", a.depth,
+                 "--adaptive: isolation depth of every irregular vertex (0-12; default 3)");
+  cmd.add_option("--tolerance", a.tolerance,
+                 "--adaptive: screen error in pixels; picks a depth per vertex from the camera");
+  cmd.add_option("--max-depth", a.max_depth, "--adaptive --tolerance: deepest level (0-12)");
+  cmd.add_option("--errors", a.errors,
+                 "--adaptive --tolerance: 'measured' (every end cap down to --max-depth "
+                 "compared with the deepest surface), 'estimated' (per-valence constants, no "
+                 "hierarchy) or 'auto' (default: measured up to 32768 cage faces)");
+  cmd.add_option("--camera", a.camera,
+                 "ex,ey,ez,tx,ty,tz,fovy_deg (default: frames the model from the front)");
+  cmd.add_option(
+      "--resolution", a.resolution,
+      render ? "Image size WxH (default 1280x720)" : "Image size WxH for --tolerance (1280x720)");
+  cmd.add_option("--tess", a.tess,
+                 render ? "--adaptive: segments per patch edge (1-32); default: screen-space rates"
+                        : "--adaptive: segments per patch edge (1-64, default 4)");
+  cmd.add_option("--tess-px", a.tess_px,
+                 render ? "--adaptive: about one segment per PX pixels of cage edge (default 8)"
+                        : "--adaptive: screen-space tessellation, one segment per PX pixels "
+                          "(camera)");
+  cmd.add_flag("--depth-colors", a.depth_colors,
+               render ? "--adaptive: colour each patch by its refinement level"
+                      : "--adaptive: colour vertices by the level of their patch");
+}
+
 Camera parse_camera(const std::string& s, Camera c) {
   std::vector<float> v = parse_numbers(s, "--camera");
   if (v.size() != 7 || !(v[6] > 0 && v[6] < 180))

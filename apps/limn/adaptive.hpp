@@ -20,6 +20,12 @@ struct AdaptiveOpts {
   bool depth_colors = false, dynamic = false;  // dynamic: --tolerance was given
 };
 
+/// Registers --depth, --tolerance, --max-depth, --errors, --camera, --resolution, --tess,
+/// --tess-px and --depth-colors on `cmd`, writing into `a` (which must outlive the command).
+/// `render`: the help texts of `limn render` (screen-space tessellation by default, colours per
+/// patch), else those of `limn subdivide`.
+void add_adaptive_options(CLI::App& cmd, AdaptiveOpts& a, bool render);
+
 /// "ex,ey,ez,tx,ty,tz,fovy_deg" -> camera (image size kept from `c`).
 Camera parse_camera(const std::string& s, Camera c);
 /// "WxH" -> w, h (1-32768 each).

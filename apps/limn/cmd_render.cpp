@@ -29,27 +29,12 @@ void add_render(CLI::App& app) {
   cmd->add_option("-o,--output", o->out, "Output image (.png)")->required();
   cmd->add_flag("--adaptive", o->adaptive,
                 "Draw the feature-adaptive limit surface (patches on the GPU), not the mesh");
-  cmd->add_option("--depth", o->a.depth,
-                  "--adaptive: isolation depth of every irregular vertex (0-12; default 3)");
-  cmd->add_option("--tolerance", o->a.tolerance,
-                  "--adaptive: screen error in pixels; picks a depth per vertex from the camera");
-  cmd->add_option("--max-depth", o->a.max_depth, "--adaptive --tolerance: deepest level (0-12)");
-  cmd->add_option("--errors", o->a.errors,
-                  "--adaptive --tolerance: 'measured', 'estimated' or 'auto' (as subdivide)");
-  cmd->add_option("--camera", o->a.camera,
-                  "ex,ey,ez,tx,ty,tz,fovy_deg (default: frames the model from the front)");
-  cmd->add_option("--resolution", o->a.resolution, "Image size WxH (default 1280x720)");
-  cmd->add_option("--tess", o->a.tess,
-                  "--adaptive: segments per patch edge (1-32); default: screen-space rates");
-  cmd->add_option("--tess-px", o->a.tess_px,
-                  "--adaptive: about one segment per PX pixels of cage edge (default 8)");
+  add_adaptive_options(*cmd, o->a, true);
   cmd->add_flag("--wireframe", o->wireframe, "Outline the patches (or the mesh's polygons)");
   cmd->add_option("--texture", o->texture,
                   "Colour from an octree texture (.lot, limn paint) painted on this surface");
   cmd->add_flag("--nearest", o->nearest, "--texture: nearest texel, not filtered");
   cmd->add_flag("--flat", o->flat, "Mesh: one normal per polygon (faceted), not per vertex");
-  cmd->add_flag("--depth-colors", o->a.depth_colors,
-                "--adaptive: colour each patch by its refinement level");
   cmd->add_option("--samples", o->samples, "Multisampling (1-16, default 4)");
   cmd->add_option("--background", o->background, "Background colour r,g,b (0-1, default white)");
   cmd->add_option("--format", o->format, "Input format, overriding the extension");

@@ -122,23 +122,7 @@ void add_subdivide(CLI::App& app) {
   cmd->add_flag("--limit", o->limit, "Push the points to the limit surface, with limit normals");
   cmd->add_flag("--adaptive", o->adaptive,
                 "Feature-adaptive limit surface: patches, tessellated watertight");
-  cmd->add_option("--depth", o->a.depth,
-                  "--adaptive: isolation depth of every irregular vertex (0-12; default 3)");
-  cmd->add_option("--tolerance", o->a.tolerance,
-                  "--adaptive: screen error in pixels; picks a depth per vertex from the camera");
-  cmd->add_option("--max-depth", o->a.max_depth, "--adaptive --tolerance: deepest level (0-12)");
-  cmd->add_option("--errors", o->a.errors,
-                  "--adaptive --tolerance: 'measured' (every end cap down to --max-depth "
-                  "compared with the deepest surface), 'estimated' (per-valence constants, no "
-                  "hierarchy) or 'auto' (default: measured up to 32768 cage faces)");
-  cmd->add_option("--camera", o->a.camera,
-                  "ex,ey,ez,tx,ty,tz,fovy_deg (default: frames the model from the front)");
-  cmd->add_option("--resolution", o->a.resolution, "Image size WxH for --tolerance (1280x720)");
-  cmd->add_option("--tess", o->a.tess, "--adaptive: segments per patch edge (1-64, default 4)");
-  cmd->add_option("--tess-px", o->a.tess_px,
-                  "--adaptive: screen-space tessellation, one segment per PX pixels (camera)");
-  cmd->add_flag("--depth-colors", o->a.depth_colors,
-                "--adaptive: colour vertices by the level of their patch");
+  add_adaptive_options(*cmd, o->a, false);
   cmd->add_option("--format", o->format, "Input format, overriding the extension");
   cmd->add_flag("--json", o->json, "Print one JSON object with counts per level and timings");
   cmd->callback([o, cmd] {
