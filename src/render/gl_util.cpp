@@ -113,7 +113,10 @@ void check(std::string_view where) {
     throw std::runtime_error(fmt::format("OpenGL: error 0x{:x} in {}", unsigned(e), where));
 }
 
-std::array<float, 16> view_projection(const Camera& c, const Box& bounds) {
+namespace {
+
+// Row-major view (rows s, u, -f) and projection of a camera, near and far fitted to `bounds`.
+void camera_matrices(const Camera& c, const Box& bounds, double V[4][4], double P[4][4]) {
   double f[3], up[3] = {c.up[0], c.up[1], c.up[2]};
   for (int k = 0; k < 3; ++k) f[k] = double(c.target[k]) - c.eye[k];
   auto normalize = [](double* v) {
@@ -145,17 +148,36 @@ std::array<float, 16> view_projection(const Camera& c, const Box& bounds) {
   const double near_z = std::max(zmin - 0.01 * span, far_z * 1e-4);
   const double t = 1.0 / std::tan(double(c.fovy_deg) * 3.14159265358979323846 / 360.0);
   const double aspect = double(c.width) / double(std::max(c.height, 1));
-  // Row-major view (rows s, u, -f) and projection, multiplied, stored column-major.
-  double V[4][4] = {
+  const double view[4][4] = {
       {s[0], s[1], s[2], 0}, {u[0], u[1], u[2], 0}, {-f[0], -f[1], -f[2], 0}, {0, 0, 0, 1}};
-  for (int r = 0; r < 3; ++r)
-    V[r][3] = -(V[r][0] * c.eye[0] + V[r][1] * c.eye[1] + V[r][2] * c.eye[2]);
-  const double P[4][4] = {
+  const double proj[4][4] = {
       {t / aspect, 0, 0, 0},
       {0, t, 0, 0},
       {0, 0, -(far_z + near_z) / (far_z - near_z), -2.0 * far_z * near_z / (far_z - near_z)},
       {0, 0, -1, 0}};
-  std::array<float, 16> out{};
+  for (int r = 0; r < 4; ++r)
+    for (int col = 0; col < 4; ++col) V[r][col] = view[r][col], P[r][col] = proj[r][col];
+  for (int r = 0; r < 3; ++r)
+    V[r][3] = -(V[r][0] * c.eye[0] + V[r][1] * c.eye[1] + V[r][2] * c.eye[2]);
+}
+
+}  // namespace
+
+void view_and_projection(const Camera& c, const Box& bounds, std::array<float, 16>& view,
+                         std::array<float, 16>& projection) {
+  double V[4][4], P[4][4];
+  camera_matrices(c, bounds, V, P);
+  for (int r = 0; r < 4; ++r)
+    for (int col = 0; col < 4; ++col) {
+      view[size_t(col * 4 + r)] = float(V[r][col]);
+      projection[size_t(col * 4 + r)] = float(P[r][col]);
+    }
+}
+
+std::array<float, 16> view_projection(const Camera& c, const Box& bounds) {
+  double V[4][4], P[4][4];
+  camera_matrices(c, bounds, V, P);
+  std::array<float, 16> out{};  // P V, stored column-major
   for (int r = 0; r < 4; ++r)
     for (int col = 0; col < 4; ++col) {
       double x = 0;

@@ -78,6 +78,10 @@ void check(std::string_view where);
 /// Column-major 4x4 view-projection of `camera` for points within `bounds` (near and far planes
 /// fitted to the box, so depth precision goes where the model is).
 std::array<float, 16> view_projection(const Camera& camera, const Box& bounds);
+/// The same camera's view and projection apart (column-major; view_projection is their product):
+/// for shaders that measure in view space, such as OpenSubdiv's screen-space tessellation.
+void view_and_projection(const Camera& camera, const Box& bounds, std::array<float, 16>& view,
+                         std::array<float, 16>& projection);
 
 /// The GLSL shading shared by the patch and mesh programs: two-sided Blinn-Phong under a head
 /// light, with an optional outline where `edge` (0 on an edge, growing inwards) is small.
@@ -86,5 +90,9 @@ extern const char* const kShadeGlsl;
 /// The octree texture lookup in GLSL (octree_texture.cpp): `vec3 oct_paint(base, pos, nrm)`,
 /// a no-op unless a GpuOctreeTexture is bound to the program.
 extern const char* const kOctreeGlsl;
+/// The same function without a texture (returns `base`): what programs drawn without a texture
+/// compile instead, since llvmpipe runs both sides of a branch on a uniform with lanes masked
+/// off, so the whole octree walk (in double precision) would cost every fragment.
+extern const char* const kNoOctreeGlsl;
 
 }  // namespace limn::gl

@@ -2,6 +2,7 @@
 // the polygon outline need no extra geometry).
 #include <fmt/format.h>
 
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <vector>
@@ -38,8 +39,13 @@ in vec3 t_nrm;
 in vec3 t_col;
 in vec3 t_bary;
 uniform vec3 eye;
-uniform bool outline;
 out vec4 frag;
+// Compiled in, not a uniform: llvmpipe runs both sides of a branch on a uniform.
+#ifdef OUTLINE
+const bool outline = true;
+#else
+const bool outline = false;
+#endif
 void main() {
   float edge = 1e9;
   if (outline) {
@@ -113,7 +119,9 @@ void triangulate(const Mesh& m, size_t f, std::vector<uint32_t>& out) {
 }  // namespace
 
 struct MeshDrawer::Impl {
-  gl::Program program;
+  // One program per combination of options, compiled at its first use: bit 0 an octree texture,
+  // bit 1 outlines.
+  std::array<gl::Program, 4> programs;
   gl::Buffer vertices;
   gl::VertexArray vao;
   gl::DrawQueries queries;
@@ -183,9 +191,6 @@ MeshDrawer::MeshDrawer(const Mesh& mesh, std::span<const float> face_colors, boo
     glVertexArrayAttribFormat(n, a, 3, GL_FLOAT, GL_FALSE, a * 3 * sizeof(float));
     glVertexArrayAttribBinding(n, a, 0);
   }
-  const std::string fs =
-      std::string("#version 450 core\n") + gl::kShadeGlsl + gl::kOctreeGlsl + kFragment;
-  m.program = gl::program("mesh", {{GL_VERTEX_SHADER, kVertex}, {GL_FRAGMENT_SHADER, fs}});
   gl::check("MeshDrawer");
 }
 
@@ -195,17 +200,20 @@ DrawStats MeshDrawer::draw(const Camera& camera, const DrawOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
   Impl& m = *impl_;
   const std::array<float, 16> vp = gl::view_projection(camera, m.bounds);
-  const GLuint prog = m.program.get();
+  gl::Program& program = m.programs[size_t((o.texture ? 1 : 0) | (o.outline ? 2 : 0))];
+  if (!program.get()) {
+    const std::string fs = std::string("#version 450 core\n") +
+                           (o.outline ? "#define OUTLINE\n" : "") + gl::kShadeGlsl +
+                           (o.texture ? gl::kOctreeGlsl : gl::kNoOctreeGlsl) + kFragment;
+    program = gl::program("mesh", {{GL_VERTEX_SHADER, kVertex}, {GL_FRAGMENT_SHADER, fs}});
+  }
+  const GLuint prog = program.get();
   glEnable(GL_DEPTH_TEST);
   glDisable(GL_CULL_FACE);
   glUseProgram(prog);
   glUniformMatrix4fv(glGetUniformLocation(prog, "view_proj"), 1, GL_FALSE, vp.data());
   glUniform3fv(glGetUniformLocation(prog, "eye"), 1, camera.eye);
-  glUniform1i(glGetUniformLocation(prog, "outline"), o.outline);
-  if (o.texture)
-    o.texture->bind(prog, o.texture_nearest ? 1 : 2);
-  else
-    glUniform1i(glGetUniformLocation(prog, "oct_mode"), 0);
+  if (o.texture) o.texture->bind(prog, o.texture_nearest ? 1 : 2);
   glBindVertexArray(m.vao.get());
   // Without colours of its own the mesh takes the options' colour (a constant attribute).
   if (!m.has_colors) glDisableVertexArrayAttrib(m.vao.get(), 2), glVertexAttrib3fv(2, o.color);

@@ -314,6 +314,10 @@ vec3 oct_paint(vec3 base, vec3 pos, vec3 nrm) {
 #endif
 )";
 
+const char* const kNoOctreeGlsl = R"(
+vec3 oct_paint(vec3 base, vec3 pos, vec3 nrm) { return base; }
+)";
+
 }  // namespace gl
 
 namespace {

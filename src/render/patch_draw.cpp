@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -241,10 +242,19 @@ in vec2 t_uv;
 flat in uint t_patch;
 uniform vec3 eye;
 uniform vec3 base;
-uniform bool outline;
-uniform bool depth_colors;
 uniform vec3 ramp[17];
 out vec4 frag;
+// Options are compiled in, not uniforms: llvmpipe runs both sides of a branch on a uniform.
+#ifdef OUTLINE
+const bool outline = true;
+#else
+const bool outline = false;
+#endif
+#ifdef DEPTH_COLORS
+const bool depth_colors = true;
+#else
+const bool depth_colors = false;
+#endif
 void main() {
   vec3 c = base;
   if (depth_colors) c = ramp[min(info[t_patch].bits & 0xFFu, 16u)];
@@ -318,7 +328,10 @@ struct PatchDrawer::Impl {
   Topology topo;
   size_t regular = 0, gregory = 0, point_floats = 0;
   uint32_t max_index = 0;
-  gl::Program regular_program, gregory_program;
+  // The drawing programs (regular, end caps) of each combination of options, compiled at its
+  // first use: bit 0 an octree texture, bit 1 outlines, bit 2 depth colours.
+  std::array<std::array<gl::Program, 2>, 8> programs;
+  std::string vs16, vs20, tc16, tc20, te16, te20;
   gl::Program regular_capture, gregory_capture;  // transform feedback, no rasterisation
   gl::Buffer points, regular_cvs, gregory_cvs, infos, lines;
   size_t points_cap = 0, lines_cap = 0, regular_cap = 0, gregory_cap = 0, infos_cap = 0;
@@ -332,7 +345,29 @@ struct PatchDrawer::Impl {
   // levels differ once a draw holds more than about 60 patches (every patch still evaluated, but
   // with another patch's data): draws of 32 patches stay clear of it; real GPUs draw all at once.
   size_t chunk = SIZE_MAX;
+
+  const std::array<gl::Program, 2>& programs_for(const DrawOptions& o);
 };
+
+const std::array<gl::Program, 2>& PatchDrawer::Impl::programs_for(const DrawOptions& o) {
+  const int flags = (o.texture ? 1 : 0) | (o.outline ? 2 : 0) | (o.depth_colors ? 4 : 0);
+  std::array<gl::Program, 2>& p = programs[size_t(flags)];
+  if (p[0].get()) return p;
+  const std::string defines = fmt::format("{}{}", o.outline ? "#define OUTLINE\n" : "",
+                                          o.depth_colors ? "#define DEPTH_COLORS\n" : "");
+  const std::string fs = with_header(16, defines.c_str(), kInfo, gl::kShadeGlsl,
+                                     o.texture ? gl::kOctreeGlsl : gl::kNoOctreeGlsl) +
+                         kFragment;
+  p[0] = gl::program("regular patches", {{GL_VERTEX_SHADER, vs16},
+                                         {GL_TESS_CONTROL_SHADER, tc16},
+                                         {GL_TESS_EVALUATION_SHADER, te16},
+                                         {GL_FRAGMENT_SHADER, fs}});
+  p[1] = gl::program("end caps", {{GL_VERTEX_SHADER, vs20},
+                                  {GL_TESS_CONTROL_SHADER, tc20},
+                                  {GL_TESS_EVALUATION_SHADER, te20},
+                                  {GL_FRAGMENT_SHADER, fs}});
+  return p;
+}
 
 PatchDrawer::PatchDrawer(const Mesh& cage, const PatchTable& table, std::span<const float> points)
     : impl_(std::make_unique<Impl>()) {
@@ -340,22 +375,13 @@ PatchDrawer::PatchDrawer(const Mesh& cage, const PatchTable& table, std::span<co
   m.cage = &cage;
   m.topo = build_topology(cage);
   upload_patches(table);
-  const std::string vs16 = with_header(16, kVertex), vs20 = with_header(20, kVertex);
-  const std::string tc16 = with_header(16, kInfo, kControl),
-                    tc20 = with_header(20, kInfo, kControl);
-  const std::string te16 = with_header(16, kInfo, kEvalCommon, kEvalRegular);
-  const std::string te20 = with_header(20, kInfo, kEvalCommon, kEvalGregory);
-  const std::string fs = with_header(16, kInfo, gl::kShadeGlsl, gl::kOctreeGlsl, kFragment);
-  m.regular_program = gl::program("regular patches", {{GL_VERTEX_SHADER, vs16},
-                                                      {GL_TESS_CONTROL_SHADER, tc16},
-                                                      {GL_TESS_EVALUATION_SHADER, te16},
-                                                      {GL_FRAGMENT_SHADER, fs}});
-  m.gregory_program = gl::program("end caps", {{GL_VERTEX_SHADER, vs20},
-                                               {GL_TESS_CONTROL_SHADER, tc20},
-                                               {GL_TESS_EVALUATION_SHADER, te20},
-                                               {GL_FRAGMENT_SHADER, fs}});
-  m.regular_capture = capture_program("regular patches (capture)", vs16, tc16, te16);
-  m.gregory_capture = capture_program("end caps (capture)", vs20, tc20, te20);
+  m.vs16 = with_header(16, kVertex), m.vs20 = with_header(20, kVertex);
+  m.tc16 = with_header(16, kInfo, kControl), m.tc20 = with_header(20, kInfo, kControl);
+  m.te16 = with_header(16, kInfo, kEvalCommon, kEvalRegular);
+  m.te20 = with_header(20, kInfo, kEvalCommon, kEvalGregory);
+  m.programs_for(DrawOptions{});  // the default programs, so that shader errors show here
+  m.regular_capture = capture_program("regular patches (capture)", m.vs16, m.tc16, m.te16);
+  m.gregory_capture = capture_program("end caps (capture)", m.vs20, m.tc20, m.te20);
   GLuint n = 0;
   glCreateVertexArrays(1, &n);
   m.vao = gl::VertexArray(n);
@@ -457,11 +483,12 @@ DrawStats PatchDrawer::draw(const Camera& camera, const DrawOptions& o) {
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, m.points.get());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, m.infos.get());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, m.lines.get());
+  const std::array<gl::Program, 2>& programs = m.programs_for(o);
   m.queries.begin();
   for (int pass = 0; pass < 2; ++pass) {
     const size_t count = pass ? m.gregory : m.regular;
     if (!count) continue;
-    const GLuint prog = (pass ? m.gregory_program : m.regular_program).get();
+    const GLuint prog = programs[size_t(pass)].get();
     const int cvs = pass ? 20 : 16;
     glUseProgram(prog);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, (pass ? m.gregory_cvs : m.regular_cvs).get());
@@ -470,13 +497,8 @@ DrawStats PatchDrawer::draw(const Camera& camera, const DrawOptions& o) {
     glUniformMatrix4fv(glGetUniformLocation(prog, "view_proj"), 1, GL_FALSE, vp.data());
     glUniform3fv(glGetUniformLocation(prog, "eye"), 1, camera.eye);
     glUniform3fv(glGetUniformLocation(prog, "base"), 1, o.color);
-    glUniform1i(glGetUniformLocation(prog, "outline"), o.outline);
-    glUniform1i(glGetUniformLocation(prog, "depth_colors"), o.depth_colors);
     glUniform3fv(glGetUniformLocation(prog, "ramp"), 17, ramp);
-    if (o.texture)
-      o.texture->bind(prog, o.texture_nearest ? 1 : 2);
-    else
-      glUniform1i(glGetUniformLocation(prog, "oct_mode"), 0);
+    if (o.texture) o.texture->bind(prog, o.texture_nearest ? 1 : 2);
     glPatchParameteri(GL_PATCH_VERTICES, cvs);
     for (size_t first = 0; first < count; first += m.chunk)
       glDrawArrays(GL_PATCHES, GLint(first * size_t(cvs)),

@@ -3,6 +3,7 @@
 // against the CPU tessellation, and images against what the geometry says they must show.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -178,6 +179,56 @@ TEST(Render, CoverageMatchesCpuTessellation) {
       }
     }
   }
+}
+
+// The drawing options are compiled into programs of their own (one per combination, made at its
+// first use): each option shows in the picture as it should, options drawn in any order give the
+// same pixels, and switching back gives the first picture again.
+TEST(Render, DrawOptionsShowAndSwitchCleanly) {
+  context();
+  const Case c = make_case("shape:torus", 3, true);
+  const Camera cam = frame_camera(c.cage, 200, 150);
+  RenderTarget target(200, 150, 1);
+  const float white[4] = {1, 1, 1, 1};
+  auto draw = [&](auto& drawer, bool outline, bool depth_colors) {
+    DrawOptions o;
+    o.outline = outline;
+    o.depth_colors = depth_colors;
+    target.begin(white);
+    drawer.draw(cam, o);
+    return target.read_rgba();
+  };
+  // Pixels whose colour is not grey (r, g, b apart): depth colours; near black (the outline is
+  // 0.06, the darkest shading 0.14 of the grey): outlines.
+  auto count = [](const std::vector<uint8_t>& px, bool coloured) {
+    size_t n = 0;
+    for (size_t i = 0; i < px.size(); i += 4) {
+      const int r = px[i], g = px[i + 1], b = px[i + 2];
+      if (coloured ? std::max({std::abs(r - g), std::abs(g - b), std::abs(r - b)}) > 40
+                   : r < 25 && g < 25 && b < 25)
+        ++n;
+    }
+    return n;
+  };
+  PatchDrawer patches(c.cage, c.table, c.points);
+  const std::vector<uint8_t> plain = draw(patches, false, false);
+  const std::vector<uint8_t> lines = draw(patches, true, false);
+  const std::vector<uint8_t> colours = draw(patches, false, true);
+  const std::vector<uint8_t> both = draw(patches, true, true);
+  EXPECT_EQ(count(plain, true), 0u);
+  EXPECT_EQ(count(plain, false), 0u);
+  EXPECT_GT(count(lines, false), 200u);
+  EXPECT_EQ(count(lines, true), 0u);
+  EXPECT_GT(count(colours, true), 1000u);
+  EXPECT_GT(count(both, false), 200u);
+  EXPECT_GT(count(both, true), 200u);  // fewer: the outlines darken many
+  EXPECT_EQ(draw(patches, false, false), plain);
+  EXPECT_EQ(draw(patches, true, true), both);
+  MeshDrawer mesh(c.cage);
+  const std::vector<uint8_t> mesh_plain = draw(mesh, false, false);
+  EXPECT_EQ(count(mesh_plain, false), 0u);
+  EXPECT_GT(count(draw(mesh, true, false), false), 200u);
+  EXPECT_EQ(draw(mesh, false, false), mesh_plain);
 }
 
 // A cube whose faces have six colours, seen from the front: the middle of the image shows the
