@@ -1,25 +1,45 @@
 // Frame time at equal screen error: the patches limn selects with a depth per vertex (measured
 // errors, tolerance 0.5 px) vs classic FAS, the fixed depth (OpenSubdiv's isolation level) whose
-// measured error is no larger, both drawn by limn's tessellation shaders with the same
-// screen-space rates (8 px per segment), over a camera path (near, mid, far) on the FAS cages.
-// Frame time = draw + glFinish, median of --frames frames after one warm-up (timer queries on a
+// measured error is no larger, drawn by limn's tessellation shaders with the same screen-space
+// rates (8 px per segment), and vs OpenSubdiv's own GLSL patch drawing (osdGPU: Far's adaptive
+// table at that same isolation level, Gregory-basis end caps, OpenSubdiv's screen-space
+// tessellation at 8 px per segment; osd_draw.hpp), over a camera path (near, mid, far). Frame
+// time = draw + glFinish, median of --frames frames after one warm-up (timer queries on a
 // software driver see only the submission). The error is measured as limn_bench_adaptive_depth
-// does (screen_error.hpp). On llvmpipe only the ratios mean something.
-//   limn_bench_render [--tolerance PX] [--resolution WxH] [--frames N]
+// does (screen_error.hpp). OpenSubdiv's image is checked against limn's fixed-depth frame at the
+// same camera: their coverage masks agree on this share of the pixels either covers ("osd
+// agree"). On llvmpipe only the ratios mean something.
+//   limn_bench_render [--tolerance PX] [--resolution WxH] [--frames N] [--mesh FILE]...
+//                     [--shape NAME]... [--cameras near,mid,far] [--no-osd] [--profile]
+//                     [--fastest] [--osd-chunk N] [--zoom Z]...
+// --zoom adds a camera at Z times the framing distance (label xZ; --cameras none: only those).
+// --mesh / --shape replace the default models (BigGuy, MonsterFrog); --shape takes limn's
+// procedural shapes (limn shape --help: terrain is the 801k-quad terrain). --profile adds, per
+// view, the regular patches and the end caps of both limn tables drawn apart, with and without
+// rasterisation (GL_RASTERIZER_DISCARD), and their triangles. --fastest reports each draw's
+// fastest frame instead of the median (on a machine shared with other work, the least disturbed).
+// --osd-chunk: patches per OpenSubdiv draw call (default: 32 on llvmpipe, as limn's drawer, else
+// whole patch arrays).
+#include <epoxy/gl.h>
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
 #include <vector>
 
 #include "limn/mesh/io.hpp"
+#include "limn/mesh/shapes.hpp"
 #include "limn/render/draw.hpp"
 #include "limn/render/gl_context.hpp"
 #include "limn/render/image.hpp"
 #include "limn/subdiv/depth.hpp"
 #include "limn/subdiv/patches.hpp"
+#include "osd_draw.hpp"
 #include "screen_error.hpp"
 
 using namespace limn;
@@ -30,54 +50,172 @@ namespace {
 struct Frame {
   double ms = 0;
   uint64_t triangles = 0;
+  std::vector<uint8_t> mask;  ///< covered pixels of the last frame
 };
 
-Frame time_frames(const Mesh& cage, const PatchTable& t, std::span<const float> points,
-                  const Camera& cam, RenderTarget& target, int frames) {
-  PatchDrawer drawer(cage, t, points);
-  DrawOptions o;
-  const float white[4] = {1, 1, 1, 1};
-  std::vector<double> ms;
-  Frame f;
-  for (int i = 0; i <= frames; ++i) {
-    target.begin(white);
-    target.finish();
-    const auto t0 = std::chrono::steady_clock::now();
-    f.triangles = drawer.draw(cam, o).triangles;
-    target.finish();
-    const double m =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    if (i > 0) ms.push_back(m);  // the first frame compiles and uploads
-  }
-  std::sort(ms.begin(), ms.end());
-  f.ms = ms[ms.size() / 2];
-  return f;
+std::vector<uint8_t> coverage(RenderTarget& target) {
+  const std::vector<uint8_t> rgba = target.read_rgba();
+  std::vector<uint8_t> m(rgba.size() / 4);
+  for (size_t i = 0; i < m.size(); ++i)
+    m[i] = rgba[4 * i] != 255 || rgba[4 * i + 1] != 255 || rgba[4 * i + 2] != 255;
+  return m;
 }
+
+// The share of the pixels either mask covers on which both agree (as the render tests count).
+double agreement(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {
+  size_t differ = 0, covered = 0;
+  for (size_t i = 0; i < a.size(); ++i) differ += a[i] != b[i], covered += a[i] || b[i];
+  return covered ? 1.0 - double(differ) / double(covered) : 1.0;
+}
+
+using Draw = std::function<uint64_t()>;  // draws one frame, returns the triangles drawn
+
+// Frame time of each draw (the median, or the fastest frame with `fastest`) after one warm-up
+// round (compiles and uploads). The draws take turns frame by frame, so that load from other
+// processes falls on all of them alike. With `masks`, one more untimed round records each draw's
+// coverage.
+bool fastest = false;  // --fastest
+
+std::vector<Frame> time_frames(RenderTarget& target, int frames, const std::vector<Draw>& draws,
+                               bool masks = false) {
+  const float white[4] = {1, 1, 1, 1};
+  std::vector<std::vector<double>> ms(draws.size());
+  std::vector<Frame> out(draws.size());
+  for (int i = 0; i <= frames; ++i)
+    for (size_t j = 0; j < draws.size(); ++j) {
+      target.begin(white);
+      target.finish();
+      const auto t0 = std::chrono::steady_clock::now();
+      out[j].triangles = draws[j]();
+      target.finish();
+      if (i > 0)
+        ms[j].push_back(
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
+                .count());
+    }
+  for (size_t j = 0; j < draws.size(); ++j) {
+    std::sort(ms[j].begin(), ms[j].end());
+    out[j].ms = fastest ? ms[j][0] : ms[j][ms[j].size() / 2];
+    if (masks) {
+      target.begin(white);
+      draws[j]();
+      out[j].mask = coverage(target);
+    }
+  }
+  return out;
+}
+
+// A draw of a limn table by its own drawer.
+Draw limn_draw(std::vector<std::unique_ptr<PatchDrawer>>& keep, const Mesh& cage,
+               const PatchTable& t, std::span<const float> points, const Camera& cam,
+               bool discard = false) {
+  keep.push_back(std::make_unique<PatchDrawer>(cage, t, points));
+  PatchDrawer* d = keep.back().get();
+  return [d, cam, discard] {
+    if (discard) glEnable(GL_RASTERIZER_DISCARD);
+    const uint64_t n = d->draw(cam, DrawOptions{}).triangles;
+    if (discard) glDisable(GL_RASTERIZER_DISCARD);
+    return n;
+  };
+}
+
+// The table with only its regular patches (gregory = false) or only its end caps.
+PatchTable only(const PatchTable& t, bool gregory) {
+  PatchTable o = t;
+  if (gregory)
+    o.regular_params.clear(), o.regular_points.clear();
+  else
+    o.gregory_params.clear(), o.gregory_points.clear();
+  return o;
+}
+
+// Per patch type and together, with and without rasterisation: where the time of a limn table
+// goes.
+void profile(const char* what, const Mesh& cage, const PatchTable& t, std::span<const float> pts,
+             const Camera& cam, RenderTarget& target, int frames) {
+  const PatchTable parts[3] = {only(t, false), only(t, true), t};
+  const char* names[3] = {"regular", "end caps", "all"};
+  std::vector<std::unique_ptr<PatchDrawer>> keep;
+  std::vector<Draw> draws;
+  for (const PatchTable& part : parts)
+    for (bool discard : {false, true})
+      draws.push_back(limn_draw(keep, cage, part, pts, cam, discard));
+  const std::vector<Frame> f = time_frames(target, frames, draws);
+  for (int k = 0; k < 3; ++k) {
+    const size_t n = parts[k].patch_count();
+    if (!n) continue;
+    const Frame& full = f[size_t(2 * k)];
+    const Frame& geo = f[size_t(2 * k + 1)];
+    fmt::print(
+        "  {} {}: {} patches, {} triangles ({:.1f} per patch), {:.1f} ms drawn, {:.1f} ms "
+        "without rasterisation ({:.2f} us per patch, {:.3f} us per triangle)\n",
+        what, names[k], n, full.triangles, double(full.triangles) / double(n), full.ms, geo.ms,
+        1e3 * geo.ms / double(n), 1e3 * geo.ms / double(std::max<uint64_t>(full.triangles, 1)));
+  }
+  std::fflush(stdout);
+}
+
+struct Model {
+  std::string name;
+  Mesh cage;
+};
 
 }  // namespace
 
 int main(int argc, char** argv) {
   float tolerance = 0.5f;
   int w = 1280, h = 720, frames = 5;
+  bool run_osd = true, run_profile = false;
+  size_t osd_chunk = 0;  // patches per OpenSubdiv draw call; 0: as limn's drawer
+  std::vector<Model> models;
+  std::string cameras = "near,mid,far";
+  std::vector<std::string> labels;  // extra camera stops (--zoom)
+  std::vector<float> zooms;
   for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--tolerance") && i + 1 < argc)
-      tolerance = float(std::atof(argv[++i]));
-    if (!std::strcmp(argv[i], "--resolution") && i + 1 < argc)
-      std::sscanf(argv[++i], "%dx%d", &w, &h);
-    if (!std::strcmp(argv[i], "--frames") && i + 1 < argc)
-      frames = std::max(1, std::atoi(argv[++i]));
+    const bool more = i + 1 < argc;
+    if (!std::strcmp(argv[i], "--tolerance") && more) tolerance = float(std::atof(argv[++i]));
+    if (!std::strcmp(argv[i], "--resolution") && more) std::sscanf(argv[++i], "%dx%d", &w, &h);
+    if (!std::strcmp(argv[i], "--frames") && more) frames = std::max(1, std::atoi(argv[++i]));
+    if (!std::strcmp(argv[i], "--cameras") && more) cameras = argv[++i];
+    if (!std::strcmp(argv[i], "--zoom") && more) {
+      labels.push_back(fmt::format("x{}", argv[++i]));
+      zooms.push_back(float(std::atof(argv[i])));
+    }
+    if (!std::strcmp(argv[i], "--no-osd")) run_osd = false;
+    if (!std::strcmp(argv[i], "--profile")) run_profile = true;
+    if (!std::strcmp(argv[i], "--fastest")) fastest = true;
+    if (!std::strcmp(argv[i], "--osd-chunk") && more) osd_chunk = size_t(std::atoll(argv[++i]));
+    if (!std::strcmp(argv[i], "--mesh") && more) {
+      const fs::path p = argv[++i];
+      models.push_back({p.stem().string(), read_mesh(p)});
+    }
+    if (!std::strcmp(argv[i], "--shape") && more) {
+      const std::string name = argv[++i];
+      models.push_back({name, make_shape(name)});
+    }
+  }
+  if (models.empty()) {
+    const fs::path dir = LIMN_SHARED_MODELS;
+    for (const char* name : {"quads/bigguy.obj", "quads/monsterfrog.obj"})
+      models.push_back({fs::path(name).stem().string(), read_mesh(dir / name)});
   }
   GlContext gl;
   RenderTarget target(w, h, 1);
-  fmt::print("renderer: {}, {}x{}, tolerance {} px, median of {} frames\n\n", gl.renderer(), w, h,
-             tolerance, frames);
+  // Patches per draw call, as limn's PatchDrawer picks it (llvmpipe mixes up per-patch data in
+  // larger draws).
+  const size_t chunk = osd_chunk                                             ? osd_chunk
+                       : gl.renderer().find("llvmpipe") != std::string::npos ? 32
+                                                                             : SIZE_MAX;
+  fmt::print("renderer: {}, {}x{}, tolerance {} px, {} of {} frames\n\n", gl.renderer(), w, h,
+             tolerance, fastest ? "fastest" : "median", frames);
   fmt::print(
       "| model | camera | dynamic patches | dynamic err px | dynamic triangles | dynamic ms | "
-      "fixed L | fixed patches | fixed err px | fixed triangles | fixed ms | fixed / dynamic |\n");
-  fmt::print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
-  const fs::path models = LIMN_SHARED_MODELS;
-  for (const char* name : {"quads/bigguy.obj", "quads/monsterfrog.obj"}) {
-    const Mesh cage = read_mesh(models / name);
+      "fixed L | fixed patches | fixed err px | fixed triangles | fixed ms | osd patches | osd "
+      "triangles | osd ms | osd agree | fixed / dynamic | osd / dynamic |\n");
+  fmt::print(
+      "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  for (const Model& model : models) {
+    const Mesh& cage = model.cage;
     PatchOptions po;
     po.subdiv = subdiv_options(cage);
     po.depth = 10;
@@ -88,7 +226,11 @@ int main(int argc, char** argv) {
     measure_vertex_errors(cage, hierarchy, errors);
     const std::vector<float> hpoints = hierarchy.table.points(cage.positions);
     const Camera framed = frame_camera(cage, w, h);
-    for (const auto& [label, zoom] : bench::kCameraPath) {
+    std::vector<bench::PathStop> stops;
+    for (const bench::PathStop& stop : bench::kCameraPath)
+      if (cameras.find(stop.label) != std::string::npos) stops.push_back(stop);
+    for (size_t k = 0; k < zooms.size(); ++k) stops.push_back({labels[k].c_str(), zooms[k]});
+    for (const auto& [label, zoom] : stops) {
       const Camera cam = bench::path_camera(framed, zoom);
       DepthOptions d;
       d.tolerance_px = tolerance;
@@ -106,13 +248,35 @@ int main(int argc, char** argv) {
         fixed_err = bench::measured_error(cage, fixed, ref, cam);
         if (fixed_err <= dyn_err) break;
       }
-      const Frame fd = time_frames(cage, dyn, hpoints, cam, target, frames);
-      const Frame ff = time_frames(cage, fixed, fixed.points(cage.positions), cam, target, frames);
+      const std::vector<float> fpoints = fixed.points(cage.positions);
+      std::vector<std::unique_ptr<PatchDrawer>> keep;
+      std::vector<Draw> draws = {limn_draw(keep, cage, dyn, hpoints, cam),
+                                 limn_draw(keep, cage, fixed, fpoints, cam)};
+      std::unique_ptr<bench::OsdGlDrawer> osd;
+      if (run_osd) {
+        osd = std::make_unique<bench::OsdGlDrawer>(cage, L);
+        draws.push_back(
+            [&] { return osd->draw(cam, DrawOptions{}.pixels_per_segment, chunk).triangles; });
+      }
+      const std::vector<Frame> f = time_frames(target, frames, draws, run_osd);
+      const Frame &fd = f[0], &ff = f[1];
+      std::string osd_cols = "- | - | - | - | -";
+      if (run_osd)
+        osd_cols = fmt::format("{} | {} | {:.1f} | {:.2f}% | {:.2f}x", osd->stats().patches,
+                               f[2].triangles, f[2].ms, 100.0 * agreement(f[2].mask, ff.mask),
+                               f[2].ms / fd.ms);
       fmt::print(
-          "| {} | {} | {} | {:.3f} | {} | {:.1f} | {} | {} | {:.3f} | {} | {:.1f} | {:.2f}x |\n",
-          fs::path(name).stem().string(), label, dyn.patch_count(), dyn_err, fd.triangles, fd.ms, L,
-          fixed.patch_count(), fixed_err, ff.triangles, ff.ms, ff.ms / fd.ms);
+          "| {} | {} | {} | {:.3f} | {} | {:.1f} | {} | {} | {:.3f} | {} | {:.1f} | {} | {:.2f}x "
+          "| {} |\n",
+          model.name, label, dyn.patch_count(), dyn_err, fd.triangles, fd.ms, L,
+          fixed.patch_count(), fixed_err, ff.triangles, ff.ms,
+          osd_cols.substr(0, osd_cols.rfind(" | ")), ff.ms / fd.ms,
+          osd_cols.substr(osd_cols.rfind(" | ") + 3));
       std::fflush(stdout);
+      if (run_profile) {
+        profile("dynamic", cage, dyn, hpoints, cam, target, frames);
+        profile("fixed", cage, fixed, fpoints, cam, target, frames);
+      }
     }
   }
 }

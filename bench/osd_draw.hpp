@@ -1,0 +1,255 @@
+// OpenSubdiv's own GPU drawing for the frame-time benchmark: Far's adaptive patch table
+// (isolation level L, Gregory-basis end caps, as limn's fixed depth L) uploaded with
+// Osd::GLPatchTable, its refined and local points in an Osd::GLVertexBuffer, drawn by a small
+// program around Osd::GLSLPatchShaderSource's common and per-patch-type stages with OpenSubdiv's
+// screen-space tessellation (OSD_ENABLE_SCREENSPACE_TESSELLATION), its level set so that a patch
+// edge gets about one segment per `pixels_per_segment` pixels like limn's rates.
+//
+// libosdGPU loads GL through its own loader (dlopen libGL.so.1, glXGetProcAddressARB), whose
+// entry points are libglvnd's dispatch stubs: they reach whatever context is current, EGL
+// included, so it shares limn's surfaceless context. This file's own GL calls go through libepoxy
+// (included first, so OpenSubdiv's <GL/gl.h> is not seen again).
+//
+// llvmpipe: OpenSubdiv's shaders read each patch's PatchParam by gl_PrimitiveID (plus a base)
+// and hand the tessellation levels on in "patch out" variables, both of which llvmpipe 22.3 mixes
+// up in large draws. Each patch array is therefore drawn in chunks (the same 32 patches limn's
+// drawer uses there), each chunk with its own primitive-id base, and the bench checks the image
+// against limn's (coverage agreement).
+#pragma once
+
+#include <epoxy/gl.h>
+
+#include <array>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "gl_util.hpp"  // src/render: view and projection of a limn Camera, gl::check
+#include "osd_bench.hpp"
+
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wshadow"
+#pragma GCC diagnostic ignored "-Wconversion"
+#pragma GCC diagnostic ignored "-Wunused-parameter"
+#include <opensubdiv/osd/glPatchTable.h>
+#include <opensubdiv/osd/glVertexBuffer.h>
+#include <opensubdiv/osd/glslPatchShaderSource.h>
+#pragma GCC diagnostic pop
+
+namespace limn::bench {
+
+class OsdGlDrawer {
+ public:
+  struct Stats {
+    size_t patches = 0, regular = 0, gregory = 0;
+    uint64_t triangles = 0;
+  };
+
+  /// Far's adaptive table of `cage` at isolation `level` (single-crease patches only where the
+  /// cage has creases, infinitely sharp patches as limn's defaults), uploaded. Throws
+  /// std::runtime_error for patch types this drawer has no program for.
+  OsdGlDrawer(const Mesh& cage, int level) {
+    namespace Far = osd::Far;
+    single_crease_ = !cage.crease_sharpness.empty();
+    std::unique_ptr<Far::TopologyRefiner> r = osd_refiner(cage);
+    Far::TopologyRefiner::AdaptiveOptions ao(level);
+    ao.useSingleCreasePatch = single_crease_;
+    ao.useInfSharpPatch = true;
+    r->RefineAdaptive(ao);
+    Far::PatchTableFactory::Options po(level);
+    po.SetEndCapType(Far::PatchTableFactory::Options::ENDCAP_GREGORY_BASIS);
+    po.useSingleCreasePatch = single_crease_;
+    po.useInfSharpPatch = true;
+    std::unique_ptr<Far::PatchTable> pt(Far::PatchTableFactory::Create(*r, po));
+
+    // Refined points level by level, then the end caps' local points.
+    struct P3 {
+      float x, y, z;
+      void Clear() { x = y = z = 0; }
+      void AddWithWeight(const P3& o, float w) { x += w * o.x, y += w * o.y, z += w * o.z; }
+    };
+    const int nrefined = r->GetNumVerticesTotal();
+    std::vector<P3> verts(size_t(nrefined + pt->GetNumLocalPoints()));
+    for (size_t v = 0; v < cage.vertex_count(); ++v)
+      verts[v] = {cage.positions[3 * v], cage.positions[3 * v + 1], cage.positions[3 * v + 2]};
+    const Far::PrimvarRefiner pr(*r);
+    P3* src = verts.data();
+    for (int k = 1; k <= r->GetMaxLevel(); ++k) {
+      P3* dst = src + r->GetLevel(k - 1).GetNumVertices();
+      pr.Interpolate(k, src, dst);
+      src = dst;
+    }
+    if (pt->GetNumLocalPoints()) pt->ComputeLocalPointValues(verts.data(), verts.data() + nrefined);
+    for (const P3& p : verts)
+      for (int k = 0; k < 3; ++k) {
+        const float c = k == 0 ? p.x : k == 1 ? p.y : p.z;
+        bounds_.min[k] = std::min(bounds_.min[k], c), bounds_.max[k] = std::max(bounds_.max[k], c);
+      }
+
+    vertices_.reset(osd::Osd::GLVertexBuffer::Create(3, int(verts.size())));
+    vertices_->UpdateData(&verts[0].x, 0, int(verts.size()));
+    table_.reset(osd::Osd::GLPatchTable::Create(pt.get()));
+    if (!vertices_ || !table_) throw std::runtime_error("OpenSubdiv: GL buffers not created");
+
+    glCreateVertexArrays(1, &vao_);
+    glBindVertexArray(vao_);
+    glBindBuffer(GL_ARRAY_BUFFER, vertices_->BindVBO());
+    glEnableVertexAttribArray(0);
+    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 3 * sizeof(float), nullptr);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, table_->GetPatchIndexBuffer());
+    glBindVertexArray(0);
+    glBindBuffer(GL_ARRAY_BUFFER, 0);
+
+    for (const osd::Osd::PatchArray& a : table_->GetPatchArrays()) {
+      const auto type = a.GetDescriptor().GetType();
+      if (type == Far::PatchDescriptor::REGULAR)
+        stats_.regular += size_t(a.GetNumPatches());
+      else if (type == Far::PatchDescriptor::GREGORY_BASIS)
+        stats_.gregory += size_t(a.GetNumPatches());
+      else
+        throw std::runtime_error("OpenSubdiv: no program for patch type " + std::to_string(type));
+      if (!programs_[slot(type)]) programs_[slot(type)] = build(type);
+    }
+    stats_.patches = stats_.regular + stats_.gregory;
+    glCreateQueries(GL_PRIMITIVES_GENERATED, 1, &query_);
+  }
+  ~OsdGlDrawer() {
+    for (GLuint p : programs_)
+      if (p) glDeleteProgram(p);
+    glDeleteVertexArrays(1, &vao_);
+    glDeleteQueries(1, &query_);
+  }
+  OsdGlDrawer(const OsdGlDrawer&) = delete;
+  OsdGlDrawer& operator=(const OsdGlDrawer&) = delete;
+
+  /// Draws into the bound framebuffer seen by `cam` (depth test on); `chunk`: patches per draw
+  /// call (SIZE_MAX: one per patch array). Returns the counts and the triangles rasterised.
+  Stats draw(const Camera& cam, float pixels_per_segment, size_t chunk) {
+    std::array<float, 16> view, proj;
+    gl::view_and_projection(cam, bounds_, view, proj);
+    // OsdComputeTessLevel: level = OsdTessLevel() * the projected diameter in NDC units (2 per
+    // image height), so this many per NDC unit gives one segment per pixels_per_segment pixels.
+    const float tess = float(cam.height) / (2.0f * pixels_per_segment);
+    glEnable(GL_DEPTH_TEST);
+    glDisable(GL_CULL_FACE);
+    glBindVertexArray(vao_);
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_BUFFER, table_->GetPatchParamTextureBuffer());
+    glBeginQuery(GL_PRIMITIVES_GENERATED, query_);
+    for (const osd::Osd::PatchArray& a : table_->GetPatchArrays()) {
+      const GLuint prog = programs_[slot(a.GetDescriptor().GetType())];
+      const int cvs = a.GetDescriptor().GetNumControlVertices();
+      glUseProgram(prog);
+      glUniformMatrix4fv(glGetUniformLocation(prog, "u_view"), 1, GL_FALSE, view.data());
+      glUniformMatrix4fv(glGetUniformLocation(prog, "u_proj"), 1, GL_FALSE, proj.data());
+      glUniform1f(glGetUniformLocation(prog, "u_tess_level"), tess);
+      glUniform3fv(glGetUniformLocation(prog, "u_eye"), 1, cam.eye);
+      glUniform1i(glGetUniformLocation(prog, "OsdPatchParamBuffer"), 0);
+      const GLint base = glGetUniformLocation(prog, "u_primitive_base");
+      glPatchParameteri(GL_PATCH_VERTICES, cvs);
+      const size_t n = size_t(a.GetNumPatches());
+      for (size_t first = 0; first < n; first += chunk) {
+        const size_t count = std::min(chunk, n - first);
+        glUniform1i(base, a.GetPrimitiveIdBase() + int(first));
+        const size_t index = size_t(a.GetIndexBase()) + first * size_t(cvs);
+        glDrawElements(GL_PATCHES, GLsizei(count * size_t(cvs)), GL_UNSIGNED_INT,
+                       reinterpret_cast<const void*>(index * sizeof(GLuint)));
+      }
+    }
+    glEndQuery(GL_PRIMITIVES_GENERATED);
+    GLuint64 prims = 0;
+    glGetQueryObjectui64v(query_, GL_QUERY_RESULT, &prims);
+    glBindVertexArray(0);
+    glUseProgram(0);
+    gl::check("OsdGlDrawer::draw");
+    Stats s = stats_;
+    s.triangles = prims;
+    return s;
+  }
+
+  const Stats& stats() const { return stats_; }
+
+ private:
+  static int slot(int type) { return type == osd::Far::PatchDescriptor::REGULAR ? 0 : 1; }
+
+  // What OpenSubdiv's shaders leave to the client: matrices, the tessellation level, the
+  // primitive-id base of the draw; defined after its common source, which declares them.
+  static constexpr const char* kClient = R"(
+uniform mat4 u_view, u_proj;
+uniform float u_tess_level;
+uniform int u_primitive_base;
+mat4 OsdModelViewMatrix() { return u_view; }
+mat4 OsdProjectionMatrix() { return u_proj; }
+mat4 OsdModelViewProjectionMatrix() { return u_proj * u_view; }
+float OsdTessLevel() { return u_tess_level; }
+int OsdGregoryQuadOffsetBase() { return 0; }
+int OsdPrimitiveIdBase() { return u_primitive_base; }
+int OsdBaseVertex() { return 0; }
+)";
+
+  // Two-sided Blinn-Phong under a head light, as limn's patch fragment shader (view space here).
+  static constexpr const char* kFragment = R"(
+in block {
+  OutputVertex v;
+} inpt;
+out vec4 frag;
+void main() {
+  vec3 v = normalize(-inpt.v.position.xyz);
+  vec3 n = normalize(inpt.v.normal);
+  if (dot(n, v) < 0.0) n = -n;
+  float diff = max(dot(n, v), 0.0);
+  vec3 h = normalize(v + vec3(0.3, 0.5, 0.0));
+  float spec = pow(max(dot(n, h), 0.0), 40.0);
+  frag = vec4(vec3(0.78, 0.78, 0.80) * (0.18 + 0.82 * diff) + vec3(0.18 * spec), 1.0);
+}
+)";
+
+  GLuint build(osd::Far::PatchDescriptor::Type type) const {
+    using Src = osd::Osd::GLSLPatchShaderSource;
+    std::string head = "#version 450 core\n#define OSD_ENABLE_SCREENSPACE_TESSELLATION\n";
+    if (single_crease_) head += "#define OSD_PATCH_ENABLE_SINGLE_CREASE\n";
+    head += Src::GetCommonShaderSource();
+    head += kClient;
+    const std::string stages[4] = {head + Src::GetVertexShaderSource(type),
+                                   head + Src::GetTessControlShaderSource(type),
+                                   head + Src::GetTessEvalShaderSource(type), head + kFragment};
+    const GLenum kinds[4] = {GL_VERTEX_SHADER, GL_TESS_CONTROL_SHADER, GL_TESS_EVALUATION_SHADER,
+                             GL_FRAGMENT_SHADER};
+    const GLuint prog = glCreateProgram();
+    for (int i = 0; i < 4; ++i) {
+      const GLuint sh = glCreateShader(kinds[i]);
+      const char* text = stages[i].c_str();
+      glShaderSource(sh, 1, &text, nullptr);
+      glCompileShader(sh);
+      GLint ok = 0;
+      glGetShaderiv(sh, GL_COMPILE_STATUS, &ok);
+      if (!ok) {
+        char log[4096];
+        glGetShaderInfoLog(sh, sizeof log, nullptr, log);
+        throw std::runtime_error("OpenSubdiv shader stage " + std::to_string(i) + ": " + log);
+      }
+      glAttachShader(prog, sh);
+      glDeleteShader(sh);
+    }
+    glLinkProgram(prog);
+    GLint ok = 0;
+    glGetProgramiv(prog, GL_LINK_STATUS, &ok);
+    if (!ok) {
+      char log[4096];
+      glGetProgramInfoLog(prog, sizeof log, nullptr, log);
+      throw std::runtime_error(std::string("OpenSubdiv program: ") + log);
+    }
+    return prog;
+  }
+
+  bool single_crease_ = false;
+  Box bounds_;
+  std::unique_ptr<osd::Osd::GLVertexBuffer> vertices_;
+  std::unique_ptr<osd::Osd::GLPatchTable> table_;
+  GLuint programs_[2] = {0, 0};
+  GLuint vao_ = 0, query_ = 0;
+  Stats stats_;
+};
+
+}  // namespace limn::bench
