@@ -24,13 +24,20 @@
 // Dab time at depth 10: strokes of dabs radius 4, 8, 16, 32 leaves at random surface points,
 // first pass (refining from the start tree) and a second pass over the same dabs.
 //   limn_bench_paint [--models DIR] [--depths 6,7,8,9,10,11] [--points N] [--quick]
+//                    [--only table|lookups|dabs] [--dump FILE] [--cpu-clock]
+// --only: one part (lookups still build limn full and the VDB grid at depth 10, unprinted);
+// --dump: writes a hash of every lookup result and of every dab configuration's painted samples
+// (after each pass), to check that a change leaves results bit for bit as they were;
+// --cpu-clock: dab times in thread CPU time instead of wall time (for a busy machine).
 #include <fmt/format.h>
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <ctime>
 #include <filesystem>
 #include <random>
 #include <string>
@@ -60,6 +67,14 @@ double now_ms() {
   return std::chrono::duration<double, std::milli>(
              std::chrono::steady_clock::now().time_since_epoch())
       .count();
+}
+
+// This thread's CPU time in ms: dab times with --cpu-clock (a busy machine's descheduling
+// left out).
+double cpu_ms() {
+  timespec ts;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) * 1e3 + double(ts.tv_nsec) * 1e-6;
 }
 
 double median(std::vector<double> v) {
@@ -265,7 +280,36 @@ struct Args {
   std::vector<int> depths = {6, 7, 8, 9, 10, 11};
   size_t points = 1000000;
   bool quick = false;
+  std::string only;  // "", "table", "lookups" or "dabs"
+  bool cpu_clock = false;
+  fs::path dump;
 };
+
+// FNV-1a over 32-bit words.
+struct Hash {
+  uint64_t h = 1469598103934665603ull;
+  void add(uint32_t v) {
+    for (int k = 0; k < 4; ++k) h = (h ^ (v >> (8 * k) & 255u)) * 1099511628211ull;
+  }
+  void add(float f) {
+    uint32_t v;
+    std::memcpy(&v, &f, 4);
+    add(v);
+  }
+};
+
+// A hash of every sample of a texture (cell, side, tag, colour), independent of the pool layout.
+uint64_t sample_hash(const OctreeTexture& t) {
+  std::vector<std::array<uint32_t, 7>> v;
+  t.for_each_sample([&](const OctreeSample& x) {
+    v.push_back({uint32_t(x.level), x.x, x.y, x.z, uint32_t(x.side), uint32_t(x.tag), x.color});
+  });
+  std::sort(v.begin(), v.end());
+  Hash h;
+  for (const auto& e : v)
+    for (uint32_t w : e) h.add(w);
+  return h.h;
+}
 
 }  // namespace
 
@@ -275,6 +319,9 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--models") && i + 1 < argc) a.models = argv[++i];
     if (!std::strcmp(argv[i], "--points") && i + 1 < argc) a.points = size_t(std::atoll(argv[++i]));
     if (!std::strcmp(argv[i], "--quick")) a.quick = true, a.depths = {6, 8, 10}, a.points = 200000;
+    if (!std::strcmp(argv[i], "--only") && i + 1 < argc) a.only = argv[++i];
+    if (!std::strcmp(argv[i], "--dump") && i + 1 < argc) a.dump = argv[++i];
+    if (!std::strcmp(argv[i], "--cpu-clock")) a.cpu_clock = true;
     if (!std::strcmp(argv[i], "--depths") && i + 1 < argc) {
       a.depths.clear();
       for (char* tok = std::strtok(argv[++i], ","); tok; tok = std::strtok(nullptr, ","))
@@ -285,21 +332,27 @@ int main(int argc, char** argv) {
   openvdb::initialize();
   const std::vector<std::string> names = {"tri/stanford-bunny.obj", "tri/spot.obj",
                                           "tri/armadillo-100k.obj"};
+  const bool do_table = a.only.empty() || a.only == "table",
+             do_lookups = a.only.empty() || a.only == "lookups",
+             do_dabs = a.only.empty() || a.only == "dabs";
+  FILE* dump = a.dump.empty() ? nullptr : std::fopen(a.dump.c_str(), "w");
 
-  fmt::print("## Table 1: memory and build time by depth (single thread)\n\n");
-  fmt::print(
-      "| model | D | dense | regular (GPU Gems) nodes | regular bytes | regular ms | adaptive "
-      "bytes | adaptive texels | adaptive ms | limn full bytes | limn full texels | B/texel | "
-      "limn full ms | OpenVDB bytes | B/texel | VDB insert ms | VDB/limn bytes |\n");
-  fmt::print(
-      "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  if (do_table) fmt::print("## Table 1: memory and build time by depth (single thread)\n\n");
+  if (do_table)
+    fmt::print(
+        "| model | D | dense | regular (GPU Gems) nodes | regular bytes | regular ms | adaptive "
+        "bytes | adaptive texels | adaptive ms | limn full bytes | limn full texels | B/texel | "
+        "limn full ms | OpenVDB bytes | B/texel | VDB insert ms | VDB/limn bytes |\n");
+  if (do_table)
+    fmt::print(
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   struct LookupCase {
     std::string model;
     OctreeTexture tex;
     openvdb::Int32Grid::Ptr grid;
   };
   std::vector<LookupCase> at10;
-  for (const std::string& name : names) {
+  for (const std::string& name : do_table || do_lookups ? names : std::vector<std::string>{}) {
     const Mesh mesh = read_mesh(a.models / name);
     const PaintSurface surf(mesh);
     const std::vector<uint32_t> tris = all_triangles(surf);
@@ -307,6 +360,7 @@ int main(int argc, char** argv) {
     const std::vector<Sample> starts = surface_points(surf, 12, 99);
     const std::string model = fs::path(name).stem().string();
     for (int depth : a.depths) {
+      if (!do_table && depth != 10) continue;
       Voxeliser vox{surf,
                     {start.origin()[0], start.origin()[1], start.origin()[2]},
                     start.size(),
@@ -315,7 +369,7 @@ int main(int argc, char** argv) {
       // Dense.
       const double dense_bytes = 4.0 * std::pow(8.0, depth);
       std::string dense = mib(dense_bytes);
-      if (dense_bytes <= 1024.0 * 1024 * 1024) {
+      if (do_table && dense_bytes <= 1024.0 * 1024 * 1024) {
         const double t0 = now_ms();
         std::vector<uint32_t> vol(size_t(dense_bytes / 4), 0);
         vox.dense = vol.data();
@@ -332,7 +386,7 @@ int main(int argc, char** argv) {
       vox.gems = &gems;
       vox.leaves = 0;
       double t0 = now_ms();
-      vox.node(0, 0, 0, 0, tris, 0);
+      if (do_table) vox.node(0, 0, 0, 0, tris, 0);
       const double gems_ms = now_ms() - t0;
       vox.gems = nullptr;
       std::string gems_nodes, gems_bytes, gems_time;
@@ -345,7 +399,7 @@ int main(int argc, char** argv) {
       gems = {};
       // Adaptive: strokes from the start tree.
       OctreeTexture ad = start;
-      const double ad_ms = paint_strokes(ad, surf, depth, starts);
+      const double ad_ms = do_table ? paint_strokes(ad, surf, depth, starts) : 0.0;
       const OctreeTextureStats ads = ad.stats();
       // limn full.
       OctreeTexture full = start;
@@ -360,26 +414,32 @@ int main(int argc, char** argv) {
       openvdb::Int32Grid::Ptr grid = vdb_from(full, depth, vdb_ms);
       const double vdb_bytes = double(grid->memUsage());
       const double vdb_texels = double(grid->activeVoxelCount());
-      fmt::print(
-          "| {} | {} | {} | {} | {} | {} | {} | {} | {:.0f} | {} | {} | {:.2f} | {:.0f} | {} | "
-          "{:.1f} | {:.0f} | {:.1f}x |\n",
-          model, depth, dense, gems_nodes, gems_bytes, gems_time, mib(double(ads.bytes)),
-          ads.painted_samples, ad_ms, mib(double(fs_.bytes)), fs_.painted_samples,
-          fs_.bytes_per_painted_texel, full_ms, mib(vdb_bytes), vdb_bytes / vdb_texels, vdb_ms,
-          vdb_bytes / double(fs_.bytes));
+      if (do_table)
+        fmt::print(
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {:.0f} | {} | {} | {:.2f} | {:.0f} | {} | "
+            "{:.1f} | {:.0f} | {:.1f}x |\n",
+            model, depth, dense, gems_nodes, gems_bytes, gems_time, mib(double(ads.bytes)),
+            ads.painted_samples, ad_ms, mib(double(fs_.bytes)), fs_.painted_samples,
+            fs_.bytes_per_painted_texel, full_ms, mib(vdb_bytes), vdb_bytes / vdb_texels, vdb_ms,
+            vdb_bytes / double(fs_.bytes));
       std::fflush(stdout);
       if (depth == 10) at10.push_back({model, std::move(full), grid});
     }
   }
 
-  fmt::print("\n## Lookups at depth 10 (single thread, {} surface points, M lookups/s)\n\n",
-             a.points);
-  fmt::print(
-      "| model | order | limn nearest | limn batched | VDB nearest | limn/VDB | batched/VDB | limn "
-      "trilinear | limn batched | VDB trilinear | limn/VDB | batched/VDB | nearest agree | index "
-      "|\n");
-  fmt::print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  if (do_lookups)
+    fmt::print("\n## Lookups at depth 10 (single thread, {} surface points, M lookups/s)\n\n",
+               a.points);
+  if (do_lookups)
+    fmt::print(
+        "| model | order | limn nearest | limn batched | VDB nearest | limn/VDB | batched/VDB | "
+        "limn "
+        "trilinear | limn batched | VDB trilinear | limn/VDB | batched/VDB | nearest agree | index "
+        "|\n");
+  if (do_lookups)
+    fmt::print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   for (LookupCase& c : at10) {
+    if (!do_lookups) break;
     const Mesh mesh = read_mesh(a.models / (c.model == "stanford-bunny" ? "tri/stanford-bunny.obj"
                                             : c.model == "spot"         ? "tri/spot.obj"
                                                                 : "tri/armadillo-100k.obj"));
@@ -465,6 +525,27 @@ int main(int argc, char** argv) {
           vtotal += acc4[0];
         }
         vt.push_back(now_ms() - t0);
+        if (rep == 0 && dump) {
+          // Every result of this repetition, and filtered one at a time from a fresh sampler.
+          Hash hn, hb, hf, hfb;
+          for (Rgba8 v : outb) hb.add(v);
+          for (float v : outf) hfb.add(v);
+          OctreeSampler s3(c.tex, &index);
+          for (const Sample& x : pts) {
+            Rgba8 col;
+            hn.add(uint32_t(s3.nearest(x.p, x.n, col))), hn.add(col);
+          }
+          OctreeSampler s4(c.tex, &index);
+          for (const Sample& x : pts) {
+            float r4[4];
+            hf.add(uint32_t(s4.filtered(x.p, x.n, 0.0f, r4)));
+            for (float v : r4) hf.add(v);
+          }
+          fmt::print(dump,
+                     "lookups {} {} nearest {:016x} nearest_batch {:016x} filtered {:016x} "
+                     "filtered_batch {:016x}\n",
+                     c.model, order, hn.h, hb.h, hf.h, hfb.h);
+        }
         if (sum == 1 || vsum == 1 || total < 0 || vtotal < 0) fmt::print("(impossible)\n");
       }
       const double n = double(pts.size()) / 1000.0;  // per ms -> M/s
@@ -479,12 +560,14 @@ int main(int argc, char** argv) {
     }
   }
 
-  fmt::print("\n## Dab time at depth 10 (single thread; radius in depth-10 leaves)\n\n");
-  fmt::print(
-      "| model | radius | dabs | first pass ms/dab (median) | mean | second pass ms/dab (median) "
-      "| texels per dab | rays per dab |\n");
-  fmt::print("|---|---:|---:|---:|---:|---:|---:|---:|\n");
-  for (const std::string& name : names) {
+  if (do_dabs)
+    fmt::print("\n## Dab time at depth 10 (single thread; radius in depth-10 leaves)\n\n");
+  if (do_dabs)
+    fmt::print(
+        "| model | radius | dabs | first pass ms/dab (median) | mean | second pass ms/dab (median) "
+        "| texels per dab | rays per dab |\n");
+  if (do_dabs) fmt::print("|---|---:|---:|---:|---:|---:|---:|---:|\n");
+  for (const std::string& name : do_dabs ? names : std::vector<std::string>{}) {
     const Mesh mesh = read_mesh(a.models / name);
     const PaintSurface surf(mesh);
     const std::vector<Sample> at = surface_points(surf, a.quick ? 40 : 100, 5);
@@ -493,18 +576,27 @@ int main(int argc, char** argv) {
       Brush b;
       b.depth = 10, b.radius = t.size() * float(leaves) / 1024.0f, b.hardness = 0.5f;
       std::vector<double> first, second;
-      size_t changed = 0, rays = 0;
+      size_t changed = 0, rays = 0, all_changed = 0, all_created = 0;
       for (int pass = 0; pass < 2; ++pass) {
         b.color[0] = pass ? 0.2f : 0.9f;
         for (const Sample& x : at) {
           StrokePainter p(t, surf);
           p.begin(b);
-          const double t0 = now_ms();
+          const double t0 = a.cpu_clock ? cpu_ms() : now_ms();
           p.dab_world(x.p);
-          const double ms = now_ms() - t0;
+          const double ms = (a.cpu_clock ? cpu_ms() : now_ms()) - t0;
           const StrokeStats st = p.end();
           (pass ? second : first).push_back(ms);
           if (pass) changed += st.samples_changed, rays += st.rays;
+          all_changed += st.samples_changed, all_created += st.leaves_created + st.nodes_created;
+        }
+        if (dump) {
+          Hash words;
+          for (uint32_t w : t.words()) words.add(w);
+          fmt::print(dump,
+                     "dabs {} {} pass {} samples {:016x} pool {:016x} changed {} created {}\n",
+                     fs::path(name).stem().string(), leaves, pass, sample_hash(t), words.h,
+                     all_changed, all_created);
         }
       }
       double mean = 0;
@@ -517,5 +609,6 @@ int main(int argc, char** argv) {
       std::fflush(stdout);
     }
   }
+  if (dump) std::fclose(dump);
   return 0;
 }
