@@ -3,10 +3,10 @@
 #include "limn/paint/brush.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <string>
-#include <unordered_map>
 #include <vector>
 
 #include "limn/paint/lookup.hpp"
@@ -65,6 +65,55 @@ inline float smooth01(float x) {
   return x * x * (3 - 2 * x);
 }
 
+// The texels a stroke touched, by key (never ~0): open addressing, linear probing, grown at half
+// full. Values stay where they are until the next insertion.
+template <class V>
+class FlatMap {
+ public:
+  const V* find(uint64_t key) const {
+    if (keys_.empty()) return nullptr;
+    for (size_t i = slot(key);; i = (i + 1) & (keys_.size() - 1)) {
+      if (keys_[i] == key) return &vals_[i];
+      if (keys_[i] == kEmpty) return nullptr;
+    }
+  }
+  // Room for n keys without growing.
+  void reserve(size_t n) {
+    if (2 * n > keys_.size()) grow(std::bit_ceil(2 * n));
+  }
+  V& find_or_add(uint64_t key, const V& init) {
+    if (2 * (count_ + 1) > keys_.size()) grow(std::max<size_t>(1024, 2 * keys_.size()));
+    size_t i = slot(key);
+    for (;; i = (i + 1) & (keys_.size() - 1)) {
+      if (keys_[i] == key) return vals_[i];
+      if (keys_[i] == kEmpty) break;
+    }
+    keys_[i] = key, vals_[i] = init, ++count_;
+    return vals_[i];
+  }
+
+ private:
+  static constexpr uint64_t kEmpty = ~uint64_t(0);
+  size_t slot(uint64_t key) const {
+    return size_t((key * 0x9e3779b97f4a7c15ull) >> 32) & (keys_.size() - 1);
+  }
+  void grow(size_t size) {
+    std::vector<uint64_t> keys = std::move(keys_);
+    std::vector<V> vals = std::move(vals_);
+    keys_.assign(size, kEmpty);
+    vals_.resize(keys_.size());
+    for (size_t j = 0; j < keys.size(); ++j) {
+      if (keys[j] == kEmpty) continue;
+      size_t i = slot(keys[j]);
+      while (keys_[i] != kEmpty) i = (i + 1) & (keys_.size() - 1);
+      keys_[i] = keys[j], vals_[i] = vals[j];
+    }
+  }
+  std::vector<uint64_t> keys_;
+  std::vector<V> vals_;
+  size_t count_ = 0;
+};
+
 }  // namespace
 
 void check_brush(const Brush& b, const char* what) {
@@ -102,7 +151,8 @@ struct StrokePainter::State : LeafPainter {
     Rgba8 orig;
     float w;
   };
-  std::unordered_map<uint64_t, Texel> texels;
+  FlatMap<Texel> texels;
+  float cos_falloff = 0;  // cos(brush.falloff_angle_deg)
   // The current dab.
   V3 c, n0;
   bool screen = false;
@@ -110,7 +160,10 @@ struct StrokePainter::State : LeafPainter {
   float r_world = 0;
   std::vector<uint32_t> tris;
 
-  float weight(V3 q, V3 nq, float half, V3& dir, float& tfar) {
+  // The brush's weight at surface point q (normal nq) were nothing in the way, and the
+  // occlusion segment toward the eye that decides whether it is (origin o, direction dir,
+  // length len). 0: nothing to paint, no ray.
+  float weight(V3 q, V3 nq, float half, V3& o, V3& dir, float& len) const {
     float t;
     if (screen) {
       double px, py;
@@ -123,6 +176,7 @@ struct StrokePainter::State : LeafPainter {
     if (!(t <= 1)) return 0;
     const float h = brush.hardness;
     const float f = t <= h ? 1.0f : 1.0f - smooth01((t - h) / (1 - h));
+    float tfar;
     if (has_camera) {
       dir = v3(camera.eye) - q;
       tfar = length(dir);
@@ -134,17 +188,47 @@ struct StrokePainter::State : LeafPainter {
     }
     const float facing = dot(nq, dir);
     if (!(facing > 0)) return 0;
-    const float cs = std::cos(brush.falloff_angle_deg * 3.14159265f / 180.0f);
+    const float cs = cos_falloff;
     const float fa = facing >= cs ? 1.0f : smooth01(facing / cs);
     const float w = brush.opacity * f * fa;
     if (!(w > 0)) return 0;
     // Off the surface by a thousandth of the cell: far less than any sheet the tags separate.
     const float eps = std::max(half * 2e-3f, tex.size() * 1e-6f);
-    const V3 o = q + eps * nq;
-    const float org[3] = {o.x, o.y, o.z}, d[3] = {dir.x, dir.y, dir.z};
-    ++stats.rays;
-    if (surf.occluded(org, d, 0.0f, tfar - eps)) return 0;
+    o = q + eps * nq;
+    len = tfar - eps;
     return w;
+  }
+
+  // A texel whose ray is in flight: the cell stays where it is until the refiner's next flush.
+  struct Pending {
+    uint64_t key;
+    LeafCell* cell;
+    int side;
+    float w;
+  };
+  static constexpr size_t kBatch = 64;
+  Pending pending[kBatch];
+  float ray_org[3 * kBatch], ray_dir[3 * kBatch], ray_near[kBatch], ray_far[kBatch];
+  uint8_t ray_hit[kBatch];
+  size_t npending = 0;
+
+  // What an unoccluded texel gets: within a stroke it keeps the strongest weight any dab gave
+  // it, blended over its colour before the stroke.
+  void apply(uint64_t key, LeafCell& cell, int side, float w) {
+    Texel& tx = texels.find_or_add(key, Texel{cell.s[side], 0.0f});
+    if (w <= tx.w) return;
+    tx.w = w;
+    const Rgba8 nc = blend(tx.orig, brush.color, brush.blend, w);
+    if (nc != cell.s[side]) ++stats.samples_changed, cell.s[side] = nc;
+  }
+
+  void flush() override {
+    if (!npending) return;
+    surf.occluded_many(npending, ray_org, ray_dir, ray_near, ray_far, ray_hit);
+    stats.rays += npending;
+    for (size_t i = 0; i < npending; ++i)
+      if (!ray_hit[i]) apply(pending[i].key, *pending[i].cell, pending[i].side, pending[i].w);
+    npending = 0;
   }
 
   void paint(const CellBox& box, LeafCell& cell, std::span<const uint32_t> cell_tris) override {
@@ -153,7 +237,7 @@ struct StrokePainter::State : LeafPainter {
       V3 q, nq;
       for (uint32_t t : cell_tris) {
         const float* n = surf.normal(t);
-        if (octree::side_for_normal(cell.tag, n) != side) continue;
+        if (surf.side(cell.tag, t) != side) continue;
         const V3 p = closest_on_triangle(box.c, v3(surf.corner(t, 0)), v3(surf.corner(t, 1)),
                                          v3(surf.corner(t, 2)));
         const V3 d = p - box.c;
@@ -162,24 +246,31 @@ struct StrokePainter::State : LeafPainter {
       }
       if (best == INFINITY) continue;
       if (side == 1 && !cell.dbl) cell.dbl = true, cell.s[1] = tex.background();
-      V3 dir;
-      float tfar;
-      const float w = weight(q, nq, box.h, dir, tfar);
+      V3 o, dir;
+      float len;
+      const float w = weight(q, nq, box.h, o, dir, len);
       if (!(w > 0)) continue;
       const uint64_t key =
           morton3(box.x, box.y, box.z) | uint64_t(box.level) << 48 | uint64_t(side) << 53;
-      auto [it, fresh] = texels.try_emplace(key, Texel{cell.s[side], 0.0f});
-      if (w <= it->second.w) continue;
-      it->second.w = w;
-      const Rgba8 nc = blend(it->second.orig, brush.color, brush.blend, w);
-      if (nc != cell.s[side]) ++stats.samples_changed, cell.s[side] = nc;
+      // A texel this stroke already gave as much changes whatever the ray finds: no ray.
+      if (const Texel* tx = texels.find(key); tx && w <= tx->w) continue;
+      if (npending == kBatch) flush();
+      pending[npending] = {key, &cell, side, w};
+      ray_org[3 * npending] = o.x, ray_org[3 * npending + 1] = o.y, ray_org[3 * npending + 2] = o.z;
+      ray_dir[3 * npending] = dir.x, ray_dir[3 * npending + 1] = dir.y,
+                  ray_dir[3 * npending + 2] = dir.z;
+      ray_near[npending] = 0.0f, ray_far[npending] = len;
+      ++npending;
     }
   }
 
   void dab(V3 centre, float region_r) {
     c = centre;
     const int depth = brush.depth;
-    const float leaf_diag = tex.size() / float(1u << depth) * 1.7320508f;
+    const float leaf = tex.size() / float(1u << depth), leaf_diag = leaf * 1.7320508f;
+    // About the texels of a flat disc of the brush's radius, both sides counted once.
+    const double across = std::min(double(r_world / leaf), 1024.0);
+    texels.reserve(size_t(4.0 * across * across) + 64);
     const float list_r = region_r + leaf_diag * 1.001f + tex.size() * 1e-5f;
     tris.clear();
     const float cc[3] = {c.x, c.y, c.z};
@@ -209,6 +300,7 @@ void StrokePainter::begin(const Brush& brush, const PaintCamera* camera) {
   if (st_) end();
   st_ = new State(t_, s_);
   st_->brush = brush;
+  st_->cos_falloff = std::cos(brush.falloff_angle_deg * 3.14159265f / 180.0f);
   st_->has_camera = camera != nullptr;
   if (camera) st_->camera = *camera;
   st_->t0 = std::chrono::steady_clock::now();

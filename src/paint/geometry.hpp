@@ -65,6 +65,92 @@ inline bool tri_box_overlap(V3 c, float h, V3 a, V3 b, V3 d, float slack) {
   return true;
 }
 
+// A quick sufficient test for tri_box_overlap: true only when tri_box_overlap(c, h, a, b, d, slack)
+// is true, found from the vertices alone (it does not decide the other cases). With e = h + slack
+// and v = vertex - c as tri_box_overlap computes them, every |v_k| <= e (1 - 2^-10) makes each of
+// its projections |sum ax_k v_k| <= (1 - 2^-10) e sum |ax_k| plus a few units of rounding, below
+// the radius e sum |ax_k| it compares against (less a few units): no axis separates. (e > 1e-12
+// keeps the products far from underflow.)
+inline bool tri_inside_box(V3 c, float h, V3 a, V3 b, V3 d, float slack) {
+  const float e = h + slack;
+  if (!(e > 1e-12f)) return false;
+  const float m = e * (1.0f - 1.0f / 1024.0f);
+  const V3 v0 = a - c, v1 = b - c, v2 = d - c;
+  return std::fabs(v0.x) <= m && std::fabs(v0.y) <= m && std::fabs(v0.z) <= m &&
+         std::fabs(v1.x) <= m && std::fabs(v1.y) <= m && std::fabs(v1.z) <= m &&
+         std::fabs(v2.x) <= m && std::fabs(v2.y) <= m && std::fabs(v2.z) <= m;
+}
+
+// tri_box_overlap against 8 boxes of one half size h at once (centres cx[k], cy[k], cz[k]): bit k
+// set when tri_box_overlap(box k) is true. Lane by lane the same float operations in the same
+// order, so the same answers; the edge axes' zero components are left out (each adds a signed
+// zero to a product, which changes no comparison). Written with GCC vector types so that a
+// caller compiled for AVX does 8 lanes at a time and any other does two halves; always inlined
+// into such a caller (no vector crosses a call, so no ABI question).
+using F8 = float __attribute__((vector_size(32)));
+using I8 = int32_t __attribute__((vector_size(32)));
+
+__attribute__((always_inline)) inline uint32_t tri_box_overlap8(const float* cx, const float* cy,
+                                                                const float* cz, float h, V3 a,
+                                                                V3 b, V3 d, float slack) {
+  const float e = h + slack;
+  F8 x, y, z;
+  __builtin_memcpy(&x, cx, sizeof x);
+  __builtin_memcpy(&y, cy, sizeof y);
+  __builtin_memcpy(&z, cz, sizeof z);
+  const F8 v0x = a.x - x, v0y = a.y - y, v0z = a.z - z;
+  const F8 v1x = b.x - x, v1y = b.y - y, v1z = b.z - z;
+  const F8 v2x = d.x - x, v2y = d.y - y, v2z = d.z - z;
+#define LIMN_MIN3(p, q, r) ((p) < (q) ? ((p) < (r) ? (p) : (r)) : ((q) < (r) ? (q) : (r)))
+#define LIMN_MAX3(p, q, r) ((p) > (q) ? ((p) > (r) ? (p) : (r)) : ((q) > (r) ? (q) : (r)))
+#define LIMN_ABS(v) ((F8)((I8)(v)&0x7fffffff))
+  // Box axes.
+  I8 ok = ~(LIMN_MIN3(v0x, v1x, v2x) > e) & ~(LIMN_MAX3(v0x, v1x, v2x) < -e);
+  ok &= ~(LIMN_MIN3(v0y, v1y, v2y) > e) & ~(LIMN_MAX3(v0y, v1y, v2y) < -e);
+  ok &= ~(LIMN_MIN3(v0z, v1z, v2z) > e) & ~(LIMN_MAX3(v0z, v1z, v2z) < -e);
+  const F8 e0x = v1x - v0x, e0y = v1y - v0y, e0z = v1z - v0z;
+  const F8 e1x = v2x - v1x, e1y = v2y - v1y, e1z = v2z - v1z;
+  const F8 e2x = v0x - v2x, e2y = v0y - v2y, e2z = v0z - v2z;
+  // Triangle normal.
+  {
+    const F8 nx = e0y * e1z - e0z * e1y, ny = e0z * e1x - e0x * e1z, nz = e0x * e1y - e0y * e1x;
+    const F8 rn = e * (LIMN_ABS(nx) + LIMN_ABS(ny) + LIMN_ABS(nz));
+    const F8 dn = nx * v0x + ny * v0y + nz * v0z;
+    ok &= ~(dn > rn) & ~(dn < -rn);
+  }
+  // Edge x box-axis: (0, -f.z, f.y), (f.z, 0, -f.x), (-f.y, f.x, 0) for each edge f.
+  // (A macro, not a lambda: no vector crosses a call.)
+#define LIMN_EDGE(fx, fy, fz)                                                                   \
+  {                                                                                             \
+    const F8 ax = LIMN_ABS(fx), ay = LIMN_ABS(fy), az = LIMN_ABS(fz);                           \
+    {                                                                                           \
+      const F8 p0 = -fz * v0y + fy * v0z, p1 = -fz * v1y + fy * v1z, p2 = -fz * v2y + fy * v2z; \
+      const F8 r = e * (az + ay);                                                               \
+      ok &= ~(LIMN_MIN3(p0, p1, p2) > r) & ~(LIMN_MAX3(p0, p1, p2) < -r);                       \
+    }                                                                                           \
+    {                                                                                           \
+      const F8 p0 = fz * v0x + -fx * v0z, p1 = fz * v1x + -fx * v1z, p2 = fz * v2x + -fx * v2z; \
+      const F8 r = e * (az + ax);                                                               \
+      ok &= ~(LIMN_MIN3(p0, p1, p2) > r) & ~(LIMN_MAX3(p0, p1, p2) < -r);                       \
+    }                                                                                           \
+    {                                                                                           \
+      const F8 p0 = -fy * v0x + fx * v0y, p1 = -fy * v1x + fx * v1y, p2 = -fy * v2x + fx * v2y; \
+      const F8 r = e * (ay + ax);                                                               \
+      ok &= ~(LIMN_MIN3(p0, p1, p2) > r) & ~(LIMN_MAX3(p0, p1, p2) < -r);                       \
+    }                                                                                           \
+  }
+  LIMN_EDGE(e0x, e0y, e0z)
+  LIMN_EDGE(e1x, e1y, e1z)
+  LIMN_EDGE(e2x, e2y, e2z)
+#undef LIMN_EDGE
+#undef LIMN_MIN3
+#undef LIMN_MAX3
+#undef LIMN_ABS
+  uint32_t bits = 0;
+  for (int k = 0; k < 8; ++k) bits |= uint32_t(ok[k] & 1) << k;
+  return bits;
+}
+
 // Closest point to p on triangle abc, by which Voronoi region of the triangle p projects into
 // (vertex, edge or face; Ericson, Real-Time Collision Detection, 5.1.5).
 inline V3 closest_on_triangle(V3 p, V3 a, V3 b, V3 c) {

@@ -1,6 +1,7 @@
 // The octree texture's pool: block codec, allocation with free lists, the journal hook, stats,
 // the structural check and sample enumeration.
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -150,44 +151,42 @@ Brick decode_brick(std::span<const uint32_t> pool, uint32_t word) {
     pos += 2;
   }
   b.avg = pool[pos++];
+  // Occupied cells in order, by their bits.
   int k = 0;
-  for (int m = 0; m < 64; ++m)
-    if (b.mask >> m & 1) {
-      b.cell[m].tag = uint8_t(pool[pos + size_t(k / 8)] >> (4 * (k % 8)) & 15u);
-      ++k;
-    }
+  for (uint64_t bits = b.mask; bits; bits &= bits - 1, ++k)
+    b.cell[std::countr_zero(bits)].tag = uint8_t(pool[pos + size_t(k / 8)] >> (4 * (k % 8)) & 15u);
   pos += size_t(k + 7) / 8;
-  for (int m = 0; m < 64; ++m)
-    if (b.mask >> m & 1) {
-      b.cell[m].s[0] = pool[pos++];
-      b.cell[m].dbl = b.dbl >> m & 1;
-      if (b.cell[m].dbl) b.cell[m].s[1] = pool[pos++];
-    }
+  for (uint64_t bits = b.mask; bits; bits &= bits - 1) {
+    const int m = std::countr_zero(bits);
+    b.cell[m].s[0] = pool[pos++];
+    b.cell[m].dbl = b.dbl >> m & 1;
+    if (b.cell[m].dbl) b.cell[m].s[1] = pool[pos++];
+  }
   return b;
 }
 
 uint32_t encode_brick(const Brick& b, std::vector<uint32_t>& out) {
   out.clear();
   uint64_t dbl = 0;
-  for (int m = 0; m < 64; ++m)
-    if ((b.mask >> m & 1) && b.cell[m].dbl) dbl |= uint64_t(1) << m;
+  for (uint64_t bits = b.mask; bits; bits &= bits - 1) {
+    const int m = std::countr_zero(bits);
+    if (b.cell[m].dbl) dbl |= uint64_t(1) << m;
+  }
   out.push_back(uint32_t(b.mask));
   out.push_back(uint32_t(b.mask >> 32));
   if (dbl) out.push_back(uint32_t(dbl)), out.push_back(uint32_t(dbl >> 32));
   out.push_back(b.avg);
   const size_t tag0 = out.size();
+  out.resize(tag0 + (size_t(std::popcount(b.mask)) + 7) / 8, 0);
   int k = 0;
-  for (int m = 0; m < 64; ++m)
-    if (b.mask >> m & 1) {
-      if (k % 8 == 0) out.push_back(0);
-      out[tag0 + size_t(k / 8)] |= uint32_t(b.cell[m].tag & 15u) << (4 * (k % 8));
-      ++k;
-    }
-  for (int m = 0; m < 64; ++m)
-    if (b.mask >> m & 1) {
-      out.push_back(b.cell[m].s[0]);
-      if (b.cell[m].dbl) out.push_back(b.cell[m].s[1]);
-    }
+  for (uint64_t bits = b.mask; bits; bits &= bits - 1, ++k)
+    out[tag0 + size_t(k / 8)] |= uint32_t(b.cell[std::countr_zero(bits)].tag & 15u)
+                                 << (4 * (k % 8));
+  for (uint64_t bits = b.mask; bits; bits &= bits - 1) {
+    const LeafCell& c = b.cell[std::countr_zero(bits)];
+    out.push_back(c.s[0]);
+    if (c.dbl) out.push_back(c.s[1]);
+  }
   return dbl ? octree::kBrickDoubleFlag : 0;
 }
 

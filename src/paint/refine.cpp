@@ -4,6 +4,7 @@
 #include "refine.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 namespace limn::detail {
@@ -39,30 +40,87 @@ bool Refiner::meets(const CellBox& b) const {
 void Refiner::filter(std::span<const uint32_t> in, const CellBox& b,
                      std::vector<uint32_t>& out) const {
   out.clear();
-  for (uint32_t t : in)
-    if (tri_box_overlap(b.c, b.h, v3(s_.corner(t, 0)), v3(s_.corner(t, 1)), v3(s_.corner(t, 2)),
-                        slack_))
-      out.push_back(t);
-}
-
-void Refiner::split(std::span<const uint32_t> in, const CellBox& b, Split& out) const {
-  CellBox kids[8];
-  for (int c = 0; c < 8; ++c) kids[c] = child(b, c), out[size_t(c)].clear();
-  const float cx = b.c.x, cy = b.c.y, cz = b.c.z;
   for (uint32_t t : in) {
     const V3 p0 = v3(s_.corner(t, 0)), p1 = v3(s_.corner(t, 1)), p2 = v3(s_.corner(t, 2));
-    const bool lo[3] = {std::min({p0.x, p1.x, p2.x}) <= cx + slack_,
-                        std::min({p0.y, p1.y, p2.y}) <= cy + slack_,
-                        std::min({p0.z, p1.z, p2.z}) <= cz + slack_};
-    const bool hi[3] = {std::max({p0.x, p1.x, p2.x}) >= cx - slack_,
-                        std::max({p0.y, p1.y, p2.y}) >= cy - slack_,
-                        std::max({p0.z, p1.z, p2.z}) >= cz - slack_};
-    for (int c = 0; c < 8; ++c) {
-      if (!((c & 1 ? hi[0] : lo[0]) && (c & 2 ? hi[1] : lo[1]) && (c & 4 ? hi[2] : lo[2])))
-        continue;
-      if (tri_box_overlap(kids[c].c, kids[c].h, p0, p1, p2, slack_)) out[size_t(c)].push_back(t);
-    }
+    if (tri_inside_box(b.c, b.h, p0, p1, p2, slack_) ||
+        tri_box_overlap(b.c, b.h, p0, p1, p2, slack_))
+      out.push_back(t);
   }
+}
+
+namespace {
+
+// Refiner::split's loop: a triangle is tested only against the children its bounding box
+// reaches, all of them at once when it reaches several.
+__attribute__((always_inline)) inline void split_loop(const PaintSurface& s,
+                                                      std::span<const uint32_t> in, V3 c,
+                                                      const float* kx, const float* ky,
+                                                      const float* kz, float kh, float slack,
+                                                      uint32_t want, Refiner::Split& out) {
+  for (uint32_t t : in) {
+    const V3 p0 = v3(s.corner(t, 0)), p1 = v3(s.corner(t, 1)), p2 = v3(s.corner(t, 2));
+    const bool lo[3] = {std::min({p0.x, p1.x, p2.x}) <= c.x + slack,
+                        std::min({p0.y, p1.y, p2.y}) <= c.y + slack,
+                        std::min({p0.z, p1.z, p2.z}) <= c.z + slack};
+    const bool hi[3] = {std::max({p0.x, p1.x, p2.x}) >= c.x - slack,
+                        std::max({p0.y, p1.y, p2.y}) >= c.y - slack,
+                        std::max({p0.z, p1.z, p2.z}) >= c.z - slack};
+    // Children by axis side: bit k of a mask is child k.
+    const uint32_t sx = (lo[0] ? 0x55u : 0u) | (hi[0] ? 0xaau : 0u),
+                   sy = (lo[1] ? 0x33u : 0u) | (hi[1] ? 0xccu : 0u),
+                   sz = (lo[2] ? 0x0fu : 0u) | (hi[2] ? 0xf0u : 0u);
+    uint32_t hit = sx & sy & sz & want;
+    if (!hit) continue;
+    if (!(hit & (hit - 1))) {
+      const int k = std::countr_zero(hit);
+      const V3 kc = {kx[k], ky[k], kz[k]};
+      if (!tri_inside_box(kc, kh, p0, p1, p2, slack) && !tri_box_overlap(kc, kh, p0, p1, p2, slack))
+        continue;
+    } else {
+      hit &= tri_box_overlap8(kx, ky, kz, kh, p0, p1, p2, slack);
+    }
+    for (; hit; hit &= hit - 1) out[size_t(std::countr_zero(hit))].push_back(t);
+  }
+}
+
+__attribute__((target("avx2"))) void split_loop_avx2(const PaintSurface& s,
+                                                     std::span<const uint32_t> in, V3 c,
+                                                     const float* kx, const float* ky,
+                                                     const float* kz, float kh, float slack,
+                                                     uint32_t want, Refiner::Split& out) {
+  split_loop(s, in, c, kx, ky, kz, kh, slack, want, out);
+}
+
+void split_loop_generic(const PaintSurface& s, std::span<const uint32_t> in, V3 c, const float* kx,
+                        const float* ky, const float* kz, float kh, float slack, uint32_t want,
+                        Refiner::Split& out) {
+  split_loop(s, in, c, kx, ky, kz, kh, slack, want, out);
+}
+
+const bool kAvx2 = __builtin_cpu_supports("avx2");
+
+}  // namespace
+
+uint32_t Refiner::meeting(const CellBox& b) const {
+  if (region_.everything) return 0xffu;
+  uint32_t m = 0;
+  for (int c = 0; c < 8; ++c) m |= uint32_t(meets(child(b, c))) << c;
+  return m;
+}
+
+void Refiner::split(std::span<const uint32_t> in, const CellBox& b, Split& out,
+                    uint32_t want) const {
+  float kx[8], ky[8], kz[8];
+  float kh = 0;
+  for (int c = 0; c < 8; ++c) {
+    const CellBox k = child(b, c);
+    kx[c] = k.c.x, ky[c] = k.c.y, kz[c] = k.c.z, kh = k.h;
+    out[size_t(c)].clear();
+  }
+  if (kAvx2)
+    split_loop_avx2(s_, in, b.c, kx, ky, kz, kh, slack_, want, out);
+  else
+    split_loop_generic(s_, in, b.c, kx, ky, kz, kh, slack_, want, out);
 }
 
 void Refiner::full_tris(const CellBox& b, std::span<const uint32_t> region_tris,
@@ -78,20 +136,19 @@ void Refiner::full_tris(const CellBox& b, std::span<const uint32_t> region_tris,
 }
 
 LeafCell Refiner::make_leaf(std::span<const uint32_t> tris, const LeafCell* parent) const {
-  auto inherit = [&](const float* n) -> Rgba8 {
+  auto inherit = [&](uint32_t t) -> Rgba8 {
     if (!parent) return ed_.background();
-    const int side = octree::side_for_normal(parent->tag, n);
+    const int side = s_.side(parent->tag, t);
     if (side == 0) return parent->s[0];
     return parent->dbl ? parent->s[1] : ed_.background();
   };
   LeafCell cell;
-  const float* front = s_.normal(tris[0]);
-  cell.tag = uint8_t(octree::tag_for_normal(front));
-  cell.s[0] = inherit(front);
+  cell.tag = uint8_t(s_.tag(tris[0]));
+  cell.s[0] = inherit(tris[0]);
   for (uint32_t t : tris)
-    if (octree::side_for_normal(cell.tag, s_.normal(t)) == 1) {
+    if (s_.side(cell.tag, t) == 1) {
       cell.dbl = true;
-      cell.s[1] = inherit(s_.normal(t));
+      cell.s[1] = inherit(t);
       break;
     }
   return cell;
@@ -142,7 +199,7 @@ uint32_t Refiner::store_brick(const Brick& b, uint32_t old_word) {
 GeneralNode Refiner::refine_leaf(const CellBox& cb, const LeafCell& leaf,
                                  std::span<const uint32_t> full) {
   GeneralNode g;
-  Split parts;
+  Split& parts = scratch_[size_t(cb.level)].full_parts;
   split(full, cb, parts);
   for (int c = 0; c < 8; ++c) {
     const std::vector<uint32_t>& fc = parts[size_t(c)];
@@ -155,13 +212,35 @@ GeneralNode Refiner::refine_leaf(const CellBox& cb, const LeafCell& leaf,
   return g;
 }
 
-Brick Refiner::make_brick(const CellBox& cb, const LeafCell& leaf, std::span<const uint32_t> full) {
-  Brick b;
-  Split p1, p2;
+namespace {
+
+// The elements of sorted `a` that sorted `b` holds, in order.
+void intersect_sorted(std::span<const uint32_t> a, std::span<const uint32_t> b,
+                      std::vector<uint32_t>& out) {
+  out.clear();
+  size_t j = 0;
+  for (uint32_t v : a) {
+    while (j < b.size() && b[j] < v) ++j;
+    if (j == b.size()) break;
+    if (b[j] == v) out.push_back(v);
+  }
+}
+
+}  // namespace
+
+bool Refiner::build_brick(const CellBox& cb, const LeafCell& leaf, std::span<const uint32_t> full,
+                          std::span<const uint32_t> tris, Brick& b) {
+  b = Brick{};
+  Split &p1 = brick1_, &p2 = brick2_;
   split(full, cb, p1);
+  // tris is a subset of full (both sorted): equal when as long. A sub-cell's region list is its
+  // full list less the triangles outside tris: the same triangles, tested against the same
+  // boxes, that splitting tris again would keep.
+  const bool same = tris.size() == full.size();
   for (int c1 = 0; c1 < 8; ++c1) {
     if (p1[size_t(c1)].empty()) continue;
-    split(p1[size_t(c1)], child(cb, c1), p2);
+    const CellBox b1 = child(cb, c1);
+    split(p1[size_t(c1)], b1, p2);
     for (int c2 = 0; c2 < 8; ++c2) {
       const std::vector<uint32_t>& f2 = p2[size_t(c2)];
       if (f2.empty()) continue;
@@ -170,10 +249,22 @@ Brick Refiner::make_brick(const CellBox& cb, const LeafCell& leaf, std::span<con
       b.cell[m] = make_leaf(f2, &leaf);
       ++stats.leaves_created;
     }
+    if (!meets(b1)) continue;
+    for (int c2 = 0; c2 < 8; ++c2) {
+      const std::vector<uint32_t>& f2 = p2[size_t(c2)];
+      if (f2.empty()) continue;
+      if (!same) intersect_sorted(f2, tris, sub_);
+      const std::vector<uint32_t>& t2 = same ? f2 : sub_;
+      const CellBox b2 = child(b1, c2);
+      if (t2.empty() || !meets(b2)) continue;
+      if (painter_) painter_->paint(b2, b.cell[8 * c1 + c2], t2), ++stats.leaves_painted;
+    }
   }
+  ++stats.bricks_created;  // counted as before, even when no sub-cell meets the surface
+  if (b.mask == 0) return false;
+  if (painter_) painter_->flush();
   b.avg = brick_avg(b);
-  ++stats.bricks_created;
-  return b;
+  return true;
 }
 
 GeneralNode Refiner::explode(const Brick& b, const CellBox&) {
@@ -217,12 +308,13 @@ bool Refiner::try_compact(const GeneralNode& n, Brick& out) const {
 }
 
 void Refiner::visit_brick(Brick& b, const CellBox& bb, std::span<const uint32_t> tris) {
-  Split p1, p2;
-  split(tris, bb, p1);
+  Split &p1 = brick1_, &p2 = brick2_;
+  // Only children meeting the region are visited: only they are split.
+  split(tris, bb, p1, meeting(bb));
   for (int c1 = 0; c1 < 8; ++c1) {
     const CellBox b1 = child(bb, c1);
     if (p1[size_t(c1)].empty() || !meets(b1)) continue;
-    split(p1[size_t(c1)], b1, p2);
+    split(p1[size_t(c1)], b1, p2, meeting(b1));
     for (int c2 = 0; c2 < 8; ++c2) {
       const CellBox b2 = child(b1, c2);
       const std::vector<uint32_t>& t2 = p2[size_t(c2)];
@@ -237,25 +329,34 @@ void Refiner::visit_brick(Brick& b, const CellBox& bb, std::span<const uint32_t>
       if (painter_) painter_->paint(b2, b.cell[m], t2), ++stats.leaves_painted;
     }
   }
+  if (painter_) painter_->flush();
   b.avg = brick_avg(b);
 }
 
 void Refiner::visit_general(GeneralNode& n, const CellBox& nb, std::span<const uint32_t> tris,
                             const std::vector<uint32_t>* parent_full) {
-  std::vector<uint32_t> full;
-  Split parts, full_parts;
-  split(tris, nb, parts);
-  bool full_split = false;
+  Scratch& sc = scratch_[size_t(nb.level)];
+  std::vector<uint32_t>& full = sc.full;
+  Split &parts = sc.parts, &full_parts = sc.full_parts;
+  // Just refined: full_parts holds parent_full split by child, and tris (a subset of
+  // parent_full, both sorted) splits into the same lists less the triangles it lacks.
+  const bool full_split = parent_full != nullptr;
+  const bool same = full_split && tris.size() == parent_full->size();
+  if (!full_split) {
+    split(tris, nb, parts, meeting(nb));
+  } else if (!same) {
+    for (int c = 0; c < 8; ++c) intersect_sorted(full_parts[size_t(c)], tris, parts[size_t(c)]);
+  }
+  const Split& tparts = same ? full_parts : parts;
   for (int c = 0; c < 8; ++c) {
     const CellBox cb = child(nb, c);
-    const std::vector<uint32_t>& tc = parts[size_t(c)];
+    const std::vector<uint32_t>& tc = tparts[size_t(c)];
     if (tc.empty() || !meets(cb)) continue;
     const int level = cb.level;
     // A child's full list, from its parent's when known (no BVH query, and no triangles from
     // outside the parent's box to test).
     auto child_full = [&] {
-      if (parent_full) {
-        if (!full_split) split(*parent_full, nb, full_parts), full_split = true;
+      if (full_split) {
         full = full_parts[size_t(c)];
       } else {
         full_tris(cb, tc, full);
@@ -278,9 +379,8 @@ void Refiner::visit_general(GeneralNode& n, const CellBox& nb, std::span<const u
         // A cell the surface only grazes within the boxes' slack may have no sub-cell the surface
         // meets once rounded: it stays a leaf.
         if (level == depth_ - 2) {
-          Brick b = make_brick(cb, n.leaf[c], full);
-          if (b.mask == 0) break;
-          visit_brick(b, cb, tc);
+          Brick b;
+          if (!build_brick(cb, n.leaf[c], full, tc, b)) break;
           n.kind[c] = CellKind::brick;
           n.ptr[c] = store_brick(b, 0);
         } else {
@@ -330,6 +430,7 @@ void Refiner::visit_general(GeneralNode& n, const CellBox& nb, std::span<const u
         break;
     }
   }
+  if (painter_) painter_->flush();
   n.avg = general_avg(n);
 }
 

@@ -29,6 +29,9 @@ class LeafPainter {
   /// `tris`: every triangle (sorted) meeting the cell; may change `cell` (samples, or add the
   /// back sample).
   virtual void paint(const CellBox& box, LeafCell& cell, std::span<const uint32_t> tris) = 0;
+  /// Finishes what `paint` left pending (cells painted since the last flush stay where they are
+  /// until then). Called before a node's cells are stored or averaged.
+  virtual void flush() {}
 };
 
 /// Where to refine and paint: everywhere, or cells meeting a ball.
@@ -60,7 +63,9 @@ class Refiner {
   /// The same for each of b's 8 children at once: a triangle is tested only against the
   /// children its bounding box reaches (1-2 of 8 deep in the tree). out[c] as filter() gives.
   using Split = std::array<std::vector<uint32_t>, 8>;
-  void split(std::span<const uint32_t> in, const CellBox& b, Split& out) const;
+  /// Only the children in `want` (bit c: child c) are tested; the others' lists come out empty.
+  void split(std::span<const uint32_t> in, const CellBox& b, Split& out,
+             uint32_t want = 0xffu) const;
   /// Child c of a box.
   CellBox child(const CellBox& b, int c) const {
     return box(b.level + 1, 2 * b.x + uint32_t(c & 1), 2 * b.y + uint32_t(c >> 1 & 1),
@@ -74,16 +79,25 @@ class Refiner {
 
  private:
   bool meets(const CellBox& b) const;
+  /// The children of b that meet the region (bit c: child c).
+  uint32_t meeting(const CellBox& b) const;
   void full_tris(const CellBox& b, std::span<const uint32_t> region_tris,
                  std::vector<uint32_t>& out) const;
   /// `full` (may be null): every triangle meeting the node's box, when known (a node just made
-  /// by refining): its children's lists are filtered from it instead of queried.
+  /// by refining): its children's lists are filtered from it instead of queried; then the
+  /// node's scratch already holds full split by child (`full_parts`), as refine_leaf left it.
   void visit_general(GeneralNode& n, const CellBox& nb, std::span<const uint32_t> tris,
                      const std::vector<uint32_t>* full = nullptr);
   void visit_brick(Brick& b, const CellBox& bb, std::span<const uint32_t> tris);
-  /// A new general node for the leaf cell `cb` (refined one level).
+  /// A new general node for the leaf cell `cb` (refined one level); leaves full split by child
+  /// in cb's scratch (`full_parts`).
   GeneralNode refine_leaf(const CellBox& cb, const LeafCell& leaf, std::span<const uint32_t> full);
-  Brick make_brick(const CellBox& cb, const LeafCell& leaf, std::span<const uint32_t> full);
+  /// A new brick for the leaf cell `cb` (two levels), visited at once: what make-then-visit
+  /// did, with the region's lists taken from the full ones (`tris`, the region's list for cb,
+  /// is a subset of `full`) instead of split again. False (b.mask 0) when no sub-cell meets
+  /// the surface.
+  bool build_brick(const CellBox& cb, const LeafCell& leaf, std::span<const uint32_t> full,
+                   std::span<const uint32_t> tris, Brick& b);
   GeneralNode explode(const Brick& b, const CellBox& bb);
   /// Encodes and stores a node; returns (ptr, info). `old_ptr` 0: new.
   void store_general(const GeneralNode& n, uint32_t old_ptr, uint32_t old_info, uint32_t& ptr,
@@ -102,6 +116,14 @@ class Refiner {
   LeafPainter* painter_ = nullptr;
   float slack_ = 0;
   std::vector<uint32_t> words_;
+  /// Per node level: lists a visit keeps while it recurses below.
+  struct Scratch {
+    std::vector<uint32_t> full;
+    Split parts, full_parts;
+  };
+  std::array<Scratch, octree::kMaxDepth + 1> scratch_;
+  Split brick1_, brick2_;      // a brick's two levels
+  std::vector<uint32_t> sub_;  // one sub-cell's region list
 };
 
 }  // namespace limn::detail

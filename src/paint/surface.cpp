@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "geometry.hpp"
+#include "limn/paint/texture.hpp"
 
 namespace limn {
 
@@ -111,6 +112,16 @@ PaintSurface::PaintSurface(const Mesh& mesh) : embree_(std::make_unique<Embree>(
     }
   }
   bounds_ = bounding_box(mesh);
+  tags_.resize(nt);
+  back_.resize(nt);
+  for (size_t t = 0; t < nt; ++t) {
+    const float* n = &normals_[3 * t];
+    tags_[t] = uint8_t(octree::tag_for_normal(n));
+    uint16_t back = 0;
+    for (int k = 0; k <= octree::kTagCount; ++k)
+      back = uint16_t(back | octree::side_for_normal(k, n) << k);
+    back_[t] = back;
+  }
 
   embree_->device = rtcNewDevice(nullptr);
   if (!embree_->device) throw std::runtime_error("Embree: cannot create a device");
@@ -216,6 +227,29 @@ bool PaintSurface::occluded(const float org[3], const float dir[3], float tnear,
   r.time = 0, r.mask = 0xffffffffu, r.id = 0, r.flags = 0;
   rtcOccluded1(embree_->scene, &ctx, &r);
   return r.tfar == -INFINITY;
+}
+
+void PaintSurface::occluded_many(size_t count, const float* org, const float* dir,
+                                 const float* tnear, const float* tfar, uint8_t* occluded) const {
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  constexpr size_t kLanes = 8;
+  for (size_t g = 0; g < count; g += kLanes) {
+    const size_t m = std::min(kLanes, count - g);
+    RTCRay8 r;
+    alignas(32) int valid[kLanes];
+    for (size_t i = 0; i < kLanes; ++i) {
+      const size_t k = g + std::min(i, m - 1);  // idle lanes repeat the last ray, masked off
+      valid[i] = i < m ? -1 : 0;
+      r.org_x[i] = org[3 * k], r.org_y[i] = org[3 * k + 1], r.org_z[i] = org[3 * k + 2];
+      r.dir_x[i] = dir[3 * k], r.dir_y[i] = dir[3 * k + 1], r.dir_z[i] = dir[3 * k + 2];
+      r.tnear[i] = tnear[k], r.tfar[i] = tfar[k];
+      r.time[i] = 0, r.mask[i] = 0xffffffffu, r.id[i] = unsigned(i), r.flags[i] = 0;
+    }
+    rtcOccluded8(valid, embree_->scene, &ctx, &r);
+    for (size_t i = 0; i < m; ++i) occluded[g + i] = r.tfar[i] == -INFINITY ? 1 : 0;
+  }
 }
 
 void PaintSurface::triangles_near(const float c[3], float r, std::vector<uint32_t>& out) const {

@@ -53,6 +53,10 @@ class PaintSurface {
   const float* normal(uint32_t t) const { return &normals_[3 * size_t(t)]; }
   /// Face of the mesh that triangle t comes from. O(1).
   uint32_t face(uint32_t t) const { return faces_[t]; }
+  /// octree::tag_for_normal of triangle t's normal, tabulated. O(1).
+  int tag(uint32_t t) const { return tags_[t]; }
+  /// octree::side_for_normal(cell_tag, normal(t)), tabulated (cell_tag in 0..kTagCount). O(1).
+  int side(int cell_tag, uint32_t t) const { return back_[t] >> cell_tag & 1; }
   /// The mesh's bounding box.
   const Box& bounds() const { return bounds_; }
 
@@ -63,6 +67,11 @@ class PaintSurface {
                  SurfaceHit& hit) const;
   /// True when the segment org + t dir, t in [tnear, tfar], meets the surface.
   bool occluded(const float org[3], const float dir[3], float tnear, float tfar) const;
+  /// `occluded` for `count` segments at once, traced in packets (coherent rays, such as one
+  /// dab's, share the walk down the BVH): org and dir hold 3 floats per ray; occluded[i] is set
+  /// to 1 or 0.
+  void occluded_many(size_t count, const float* org, const float* dir, const float* tnear,
+                     const float* tfar, uint8_t* occluded) const;
   /// Appends the non-degenerate triangles whose bounds may meet the ball (c, r), sorted by index
   /// (a superset; callers filter exactly). O(log T + answer).
   void triangles_near(const float c[3], float r, std::vector<uint32_t>& out) const;
@@ -70,6 +79,8 @@ class PaintSurface {
  private:
   std::vector<float> corners_, normals_;
   std::vector<uint32_t> faces_;
+  std::vector<uint8_t> tags_;   // per triangle: its normal's tag
+  std::vector<uint16_t> back_;  // per triangle: bit k set when its normal is on side 1 of tag k
   Box bounds_;
   struct Embree;
   std::unique_ptr<Embree> embree_;
