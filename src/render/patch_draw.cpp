@@ -273,15 +273,31 @@ std::string with_header(int cvs, const char* a, const char* b = "", const char* 
   return fmt::format("#version 450 core\n#define CVS {}\n{}{}{}{}", cvs, a, b, c, d);
 }
 
+// Scratch space of line_rates, kept between draws.
+struct RateScratch {
+  std::vector<float> reach;   // per cage vertex
+  std::vector<uint8_t> seen;  // per cage edge: beside a face that may be in view
+};
+
 // The level-0 rate of every cage line for this view: segments per cage edge (its projected
-// length over `pixels_per_segment`), then per cage face the largest of its edges'.
+// length over `pixels_per_segment`), then per cage face the largest of its edges'. Lines that
+// only border faces wholly out of view get 1 segment: a face is out of view when a ball around
+// its centroid holding every point its patches are made from (the vertices of the faces around
+// its corners, each within half that face's perimeter of the corner; subdivision only averages
+// them) lies outside the view. Every patch of a face that may be seen keeps its rates, and rates
+// stay per line, so shared edges still agree.
 void line_rates(const Mesh& cage, const Topology& topo, const Camera& camera, float pps,
-                std::vector<float>& out) {
+                std::vector<float>& out, RateScratch& scratch) {
   const size_t ne = topo.edge_count(), nf = cage.face_count();
   out.assign(ne + nf, 0.0f);
+  auto pos = [&](uint32_t v) { return &cage.positions[3 * size_t(v)]; };
+  auto dist = [](const float* a, const float* b) {
+    return std::sqrt(double(a[0] - b[0]) * (a[0] - b[0]) + double(a[1] - b[1]) * (a[1] - b[1]) +
+                     double(a[2] - b[2]) * (a[2] - b[2]));
+  };
   for (size_t e = 0; e < ne; ++e) {
-    const float* a = &cage.positions[3 * size_t(topo.edge_vertices[2 * e])];
-    const float* b = &cage.positions[3 * size_t(topo.edge_vertices[2 * e + 1])];
+    const float* a = pos(topo.edge_vertices[2 * e]);
+    const float* b = pos(topo.edge_vertices[2 * e + 1]);
     double ax, ay, bx, by;
     if (!camera.project(a, ax, ay) || !camera.project(b, bx, by)) {
       out[e] = 1e6f;  // reaches behind the eye: as fine as it goes
@@ -289,12 +305,41 @@ void line_rates(const Mesh& cage, const Topology& topo, const Camera& camera, fl
     }
     out[e] = float(std::hypot(ax - bx, ay - by) / double(pps));
   }
+  std::vector<float>& reach = scratch.reach;
+  reach.assign(cage.vertex_count(), 0.0f);
   for (size_t f = 0; f < nf; ++f) {
+    const uint32_t b = cage.face_offsets[f], n = cage.face_size(f);
+    double half = 0;
+    for (uint32_t c = 0; c < n; ++c)
+      half += dist(pos(cage.face_vertices[b + c]), pos(cage.face_vertices[b + (c + 1) % n]));
+    half *= 0.5;
+    for (uint32_t c = 0; c < n; ++c) {
+      float& r = reach[cage.face_vertices[b + c]];
+      r = std::max(r, float(half));
+    }
+  }
+  std::vector<uint8_t>& seen = scratch.seen;
+  seen.assign(ne, 0);
+  for (size_t f = 0; f < nf; ++f) {
+    const uint32_t b = cage.face_offsets[f], n = cage.face_size(f);
+    float centre[3] = {0, 0, 0};
+    for (uint32_t c = 0; c < n; ++c)
+      for (int k = 0; k < 3; ++k) centre[k] += pos(cage.face_vertices[b + c])[k] / float(n);
+    double radius = 0;
+    for (uint32_t c = 0; c < n; ++c) {
+      const uint32_t v = cage.face_vertices[b + c];
+      radius = std::max(radius, dist(centre, pos(v)) + double(reach[v]));
+    }
+    if (camera.ball_outside(centre, 1.01 * radius + 1e-6)) continue;  // out[ne + f] stays 0
     float m = 0;
-    for (uint32_t c = cage.face_offsets[f]; c < cage.face_offsets[f + 1]; ++c)
+    for (uint32_t c = b; c < b + n; ++c) {
       m = std::max(m, out[topo.corner_edge[c]]);
+      seen[topo.corner_edge[c]] = 1;
+    }
     out[ne + f] = m;
   }
+  for (size_t e = 0; e < ne; ++e)
+    if (!seen[e]) out[e] = 0;
 }
 
 // The tessellation stages alone, their position, (s, t) and patch captured by transform
@@ -340,6 +385,7 @@ struct PatchDrawer::Impl {
   gl::Framebuffer capture_fbo;
   gl::Renderbuffer capture_rb;
   std::vector<float> rates;
+  RateScratch rate_scratch;
   Box bounds;
   // Patches per draw call. llvmpipe (Mesa 22.3) mixes up the tessellation of patches whose
   // levels differ once a draw holds more than about 60 patches (every patch still evaluated, but
@@ -471,7 +517,7 @@ DrawStats PatchDrawer::draw(const Camera& camera, const DrawOptions& o) {
   if (o.factor < 0 || o.factor > 32)
     throw InputError(fmt::format("render: tessellation factor {} out of range (1-32)", o.factor));
   if (!(o.pixels_per_segment > 0)) throw InputError("render: pixels per segment must be positive");
-  line_rates(*m.cage, m.topo, camera, o.pixels_per_segment, m.rates);
+  line_rates(*m.cage, m.topo, camera, o.pixels_per_segment, m.rates, m.rate_scratch);
   gl::upload(m.lines, m.lines_cap, m.rates.data(), m.rates.size() * sizeof(float));
   const std::array<float, 16> vp = gl::view_projection(camera, m.bounds);
   float ramp[17 * 3];
@@ -517,7 +563,7 @@ DrawStats PatchDrawer::draw(const Camera& camera, const DrawOptions& o) {
 
 PatchDrawer::Capture PatchDrawer::capture(const Camera& camera, const DrawOptions& o) {
   Impl& m = *impl_;
-  line_rates(*m.cage, m.topo, camera, o.pixels_per_segment, m.rates);
+  line_rates(*m.cage, m.topo, camera, o.pixels_per_segment, m.rates, m.rate_scratch);
   gl::upload(m.lines, m.lines_cap, m.rates.data(), m.rates.size() * sizeof(float));
   const std::array<float, 16> vp = gl::view_projection(camera, m.bounds);
   Capture out;

@@ -181,6 +181,50 @@ TEST(Render, CoverageMatchesCpuTessellation) {
   }
 }
 
+// Close over a terrain most patches lie out of view: they get one segment per edge; a patch with
+// a point in view drawn with one segment per edge must be small on screen (its line shorter than
+// 8 px x sqrt 2 at level 0, so each edge under 12 px), as without the culling.
+TEST(Render, PatchesOutOfViewAreCoarse) {
+  context();
+  const Case c = make_case("shape:terrain-small", 2, false);
+  Camera cam = frame_camera(c.cage, 320, 240);
+  for (int k = 0; k < 3; ++k) cam.eye[k] = cam.target[k] + 0.15f * (cam.eye[k] - cam.target[k]);
+  PatchDrawer drawer(c.cage, c.table, c.points);
+  const PatchDrawer::Capture cap = drawer.capture(cam, DrawOptions{});
+  const size_t n = c.table.patch_count();
+  std::vector<size_t> points(n, 0);
+  std::vector<uint8_t> in_view(n, 0);
+  std::vector<Box> extent(n);  // on screen (x, y)
+  for (size_t i = 0; i < cap.coords.size(); ++i) {
+    const uint32_t p = cap.coords[i].patch;
+    ++points[p];
+    double x, y;
+    if (!cam.project(&cap.positions[3 * i], x, y)) continue;
+    if (x >= 0 && y >= 0 && x <= cam.width && y <= cam.height) in_view[p] = 1;
+    const float xy[2] = {float(x), float(y)};
+    for (int k = 0; k < 2; ++k)
+      extent[p].min[k] = std::min(extent[p].min[k], xy[k]),
+      extent[p].max[k] = std::max(extent[p].max[k], xy[k]);
+  }
+  size_t coarse = 0, seen = 0, fine = 0;
+  for (size_t p = 0; p < n; ++p) {
+    if (!in_view[p]) {
+      coarse += points[p] == 6;  // 2 triangles
+      continue;
+    }
+    ++seen;
+    if (points[p] > 6) {
+      ++fine;
+      continue;
+    }
+    const double w = extent[p].max[0] - extent[p].min[0], h = extent[p].max[1] - extent[p].min[1];
+    EXPECT_LT(std::max(w, h), 24.0) << "patch " << p << " in view, large, one segment per edge";
+  }
+  EXPECT_GT(fine, 10u);
+  EXPECT_GT(seen, fine / 2);
+  EXPECT_GT(coarse, n / 2);
+}
+
 // The drawing options are compiled into programs of their own (one per combination, made at its
 // first use): each option shows in the picture as it should, options drawn in any order give the
 // same pixels, and switching back gives the first picture again.
