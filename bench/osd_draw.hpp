@@ -2,8 +2,9 @@
 // (isolation level L, Gregory-basis end caps, as limn's fixed depth L) uploaded with
 // Osd::GLPatchTable, its refined and local points in an Osd::GLVertexBuffer, drawn by a small
 // program around Osd::GLSLPatchShaderSource's common and per-patch-type stages with OpenSubdiv's
-// screen-space tessellation (OSD_ENABLE_SCREENSPACE_TESSELLATION), its level set so that a patch
-// edge gets about one segment per `pixels_per_segment` pixels like limn's rates.
+// screen-space tessellation (OSD_ENABLE_SCREENSPACE_TESSELLATION) and patch culling
+// (OSD_ENABLE_PATCH_CULL), its level set so that a patch edge gets about one segment per
+// `pixels_per_segment` pixels like limn's rates.
 //
 // libosdGPU loads GL through its own loader (dlopen libGL.so.1, glXGetProcAddressARB), whose
 // entry points are libglvnd's dispatch stubs: they reach whatever context is current, EGL
@@ -207,7 +208,11 @@ void main() {
 
   GLuint build(osd::Far::PatchDescriptor::Type type) const {
     using Src = osd::Osd::GLSLPatchShaderSource;
-    std::string head = "#version 450 core\n#define OSD_ENABLE_SCREENSPACE_TESSELLATION\n";
+    // With OpenSubdiv's frustum culling of patches (levels 0 for a patch whose control points
+    // are all beyond one clip plane), as limn coarsens the patches of faces out of view.
+    std::string head =
+        "#version 450 core\n#define OSD_ENABLE_SCREENSPACE_TESSELLATION\n"
+        "#define OSD_ENABLE_PATCH_CULL\n";
     if (single_crease_) head += "#define OSD_PATCH_ENABLE_SINGLE_CREASE\n";
     head += Src::GetCommonShaderSource();
     head += kClient;
