@@ -5,7 +5,9 @@
 // as limn's CPU evaluator does. Tessellation rates are powers of two per patch edge, taken from
 // the cage edge or cage face the edge lies on and the patch's level, so two patches sharing an
 // edge always agree, and a patch edge bordering finer patches (its transition bit) takes exactly
-// the sum of their rates: no cracks. Per-patch data reaches the shaders through the vertex index
+// the sum of their rates: no cracks. A cage line bordering only faces wholly out of view gets one
+// segment (the faces' patches are off screen), so close-ups of large cages tessellate only what
+// is seen. Per-patch data reaches the shaders through the vertex index
 // (never gl_PrimitiveID, which llvmpipe restarts every 1024 patch vertices).
 // MeshDrawer draws polygon meshes (fan-triangulated) with normals, vertex or face colours.
 #pragma once
