@@ -101,19 +101,26 @@ const bool kAvx2 = __builtin_cpu_supports("avx2");
 
 }  // namespace
 
-uint32_t Refiner::meeting(const CellBox& b) const {
+uint32_t Refiner::meeting(const CellBox kids[8]) const {
   if (region_.everything) return 0xffu;
   uint32_t m = 0;
-  for (int c = 0; c < 8; ++c) m |= uint32_t(meets(child(b, c))) << c;
+  for (int c = 0; c < 8; ++c) m |= uint32_t(meets(kids[c])) << c;
   return m;
 }
 
 void Refiner::split(std::span<const uint32_t> in, const CellBox& b, Split& out,
                     uint32_t want) const {
+  CellBox kids[8];
+  children(b, kids);
+  split(in, b, kids, out, want);
+}
+
+void Refiner::split(std::span<const uint32_t> in, const CellBox& b, const CellBox kids[8],
+                    Split& out, uint32_t want) const {
   float kx[8], ky[8], kz[8];
   float kh = 0;
   for (int c = 0; c < 8; ++c) {
-    const CellBox k = child(b, c);
+    const CellBox& k = kids[c];
     kx[c] = k.c.x, ky[c] = k.c.y, kz[c] = k.c.z, kh = k.h;
     out[size_t(c)].clear();
   }
@@ -232,15 +239,18 @@ bool Refiner::build_brick(const CellBox& cb, const LeafCell& leaf, std::span<con
                           std::span<const uint32_t> tris, Brick& b) {
   b = Brick{};
   Split &p1 = brick1_, &p2 = brick2_;
-  split(full, cb, p1);
+  CellBox k1[8], k2[8];
+  children(cb, k1);
+  split(full, cb, k1, p1);
   // tris is a subset of full (both sorted): equal when as long. A sub-cell's region list is its
   // full list less the triangles outside tris: the same triangles, tested against the same
   // boxes, that splitting tris again would keep.
   const bool same = tris.size() == full.size();
   for (int c1 = 0; c1 < 8; ++c1) {
     if (p1[size_t(c1)].empty()) continue;
-    const CellBox b1 = child(cb, c1);
-    split(p1[size_t(c1)], b1, p2);
+    const CellBox& b1 = k1[c1];
+    children(b1, k2);
+    split(p1[size_t(c1)], b1, k2, p2);
     for (int c2 = 0; c2 < 8; ++c2) {
       const std::vector<uint32_t>& f2 = p2[size_t(c2)];
       if (f2.empty()) continue;
@@ -255,7 +265,7 @@ bool Refiner::build_brick(const CellBox& cb, const LeafCell& leaf, std::span<con
       if (f2.empty()) continue;
       if (!same) intersect_sorted(f2, tris, sub_);
       const std::vector<uint32_t>& t2 = same ? f2 : sub_;
-      const CellBox b2 = child(b1, c2);
+      const CellBox& b2 = k2[c2];
       if (t2.empty() || !meets(b2)) continue;
       if (painter_) painter_->paint(b2, b.cell[8 * c1 + c2], t2), ++stats.leaves_painted;
     }
@@ -310,15 +320,20 @@ bool Refiner::try_compact(const GeneralNode& n, Brick& out) const {
 void Refiner::visit_brick(Brick& b, const CellBox& bb, std::span<const uint32_t> tris) {
   Split &p1 = brick1_, &p2 = brick2_;
   // Only children meeting the region are visited: only they are split.
-  split(tris, bb, p1, meeting(bb));
+  CellBox k1[8], k2[8];
+  children(bb, k1);
+  const uint32_t want1 = meeting(k1);
+  split(tris, bb, k1, p1, want1);
   for (int c1 = 0; c1 < 8; ++c1) {
-    const CellBox b1 = child(bb, c1);
-    if (p1[size_t(c1)].empty() || !meets(b1)) continue;
-    split(p1[size_t(c1)], b1, p2, meeting(b1));
+    const CellBox& b1 = k1[c1];
+    if (p1[size_t(c1)].empty() || !(want1 >> c1 & 1)) continue;
+    children(b1, k2);
+    const uint32_t want2 = meeting(k2);
+    split(p1[size_t(c1)], b1, k2, p2, want2);
     for (int c2 = 0; c2 < 8; ++c2) {
-      const CellBox b2 = child(b1, c2);
+      const CellBox& b2 = k2[c2];
       const std::vector<uint32_t>& t2 = p2[size_t(c2)];
-      if (t2.empty() || !meets(b2)) continue;
+      if (t2.empty() || !(want2 >> c2 & 1)) continue;
       const int m = 8 * c1 + c2;
       if (!(b.mask >> m & 1)) {
         // A surface cell the brick lacks: the texture was made for another mesh.
@@ -335,6 +350,9 @@ void Refiner::visit_brick(Brick& b, const CellBox& bb, std::span<const uint32_t>
 
 void Refiner::visit_general(GeneralNode& n, const CellBox& nb, std::span<const uint32_t> tris,
                             const std::vector<uint32_t>* parent_full) {
+  CellBox kids[8];
+  children(nb, kids);
+  const uint32_t want = meeting(kids);
   Scratch& sc = scratch_[size_t(nb.level)];
   std::vector<uint32_t>& full = sc.full;
   Split &parts = sc.parts, &full_parts = sc.full_parts;
@@ -343,15 +361,15 @@ void Refiner::visit_general(GeneralNode& n, const CellBox& nb, std::span<const u
   const bool full_split = parent_full != nullptr;
   const bool same = full_split && tris.size() == parent_full->size();
   if (!full_split) {
-    split(tris, nb, parts, meeting(nb));
+    split(tris, nb, kids, parts, want);
   } else if (!same) {
     for (int c = 0; c < 8; ++c) intersect_sorted(full_parts[size_t(c)], tris, parts[size_t(c)]);
   }
   const Split& tparts = same ? full_parts : parts;
   for (int c = 0; c < 8; ++c) {
-    const CellBox cb = child(nb, c);
+    const CellBox& cb = kids[c];
     const std::vector<uint32_t>& tc = tparts[size_t(c)];
-    if (tc.empty() || !meets(cb)) continue;
+    if (tc.empty() || !(want >> c & 1)) continue;
     const int level = cb.level;
     // A child's full list, from its parent's when known (no BVH query, and no triangles from
     // outside the parent's box to test).

@@ -66,6 +66,13 @@ class Refiner {
   /// Only the children in `want` (bit c: child c) are tested; the others' lists come out empty.
   void split(std::span<const uint32_t> in, const CellBox& b, Split& out,
              uint32_t want = 0xffu) const;
+  /// The same with b's children already at hand (`kids`, as children() gives them).
+  void split(std::span<const uint32_t> in, const CellBox& b, const CellBox kids[8], Split& out,
+             uint32_t want = 0xffu) const;
+  /// The 8 children of a box.
+  void children(const CellBox& b, CellBox kids[8]) const {
+    for (int c = 0; c < 8; ++c) kids[c] = child(b, c);
+  }
   /// Child c of a box.
   CellBox child(const CellBox& b, int c) const {
     return box(b.level + 1, 2 * b.x + uint32_t(c & 1), 2 * b.y + uint32_t(c >> 1 & 1),
@@ -79,8 +86,8 @@ class Refiner {
 
  private:
   bool meets(const CellBox& b) const;
-  /// The children of b that meet the region (bit c: child c).
-  uint32_t meeting(const CellBox& b) const;
+  /// Which of b's children (`kids`) meet the region (bit c: child c).
+  uint32_t meeting(const CellBox kids[8]) const;
   void full_tris(const CellBox& b, std::span<const uint32_t> region_tris,
                  std::vector<uint32_t>& out) const;
   /// `full` (may be null): every triangle meeting the node's box, when known (a node just made
