@@ -24,11 +24,13 @@
 // Dab time at depth 10: strokes of dabs radius 4, 8, 16, 32 leaves at random surface points,
 // first pass (refining from the start tree) and a second pass over the same dabs.
 //   limn_bench_paint [--models DIR] [--depths 6,7,8,9,10,11] [--points N] [--quick]
-//                    [--only table|lookups|dabs] [--dump FILE] [--cpu-clock]
+//                    [--only table|lookups|dabs] [--dump FILE] [--cpu-clock] [--reps N]
 // --only: one part (lookups still build limn full and the VDB grid at depth 10, unprinted);
 // --dump: writes a hash of every lookup result and of every dab configuration's painted samples
 // (after each pass), to check that a change leaves results bit for bit as they were;
-// --cpu-clock: dab times in thread CPU time instead of wall time (for a busy machine).
+// --cpu-clock: lookup and dab times in thread CPU time instead of wall time (for a busy
+// machine); --reps:
+// lookup repetitions (3).
 #include <fmt/format.h>
 #include <tbb/global_control.h>
 
@@ -69,12 +71,18 @@ double now_ms() {
       .count();
 }
 
-// This thread's CPU time in ms: dab times with --cpu-clock (a busy machine's descheduling
-// left out).
+// This thread's CPU time in ms: times with --cpu-clock (a busy machine's descheduling left
+// out).
 double cpu_ms() {
   timespec ts;
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
   return double(ts.tv_sec) * 1e3 + double(ts.tv_nsec) * 1e-6;
+}
+
+bool g_cpu_clock = false;
+// The clock lookups and dabs are timed with.
+double clock_ms() {
+  return g_cpu_clock ? cpu_ms() : now_ms();
 }
 
 double median(std::vector<double> v) {
@@ -282,6 +290,7 @@ struct Args {
   bool quick = false;
   std::string only;  // "", "table", "lookups" or "dabs"
   bool cpu_clock = false;
+  int reps = 3;  // lookup repetitions (medians)
   fs::path dump;
 };
 
@@ -322,12 +331,14 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--only") && i + 1 < argc) a.only = argv[++i];
     if (!std::strcmp(argv[i], "--dump") && i + 1 < argc) a.dump = argv[++i];
     if (!std::strcmp(argv[i], "--cpu-clock")) a.cpu_clock = true;
+    if (!std::strcmp(argv[i], "--reps") && i + 1 < argc) a.reps = std::max(1, std::atoi(argv[++i]));
     if (!std::strcmp(argv[i], "--depths") && i + 1 < argc) {
       a.depths.clear();
       for (char* tok = std::strtok(argv[++i], ","); tok; tok = std::strtok(nullptr, ","))
         a.depths.push_back(std::atoi(tok));
     }
   }
+  g_cpu_clock = a.cpu_clock;
   tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
   openvdb::initialize();
   const std::vector<std::string> names = {"tri/stanford-bunny.obj", "tri/spot.obj",
@@ -458,25 +469,25 @@ int main(int argc, char** argv) {
       std::vector<float> outf(4 * pts.size());
       std::vector<double> ln, lb, vn, lt, ltb, vt;
       size_t agree = 0, found = 0;
-      for (int rep = 0; rep < 3; ++rep) {
+      for (int rep = 0; rep < a.reps; ++rep) {
         // limn nearest, one point at a time, then in batches.
         OctreeSampler smp(c.tex, &index);
         uint64_t sum = 0;
-        double t0 = now_ms();
+        double t0 = clock_ms();
         for (const Sample& x : pts) {
           Rgba8 col;
           smp.nearest(x.p, x.n, col);
           sum += col;
         }
-        ln.push_back(now_ms() - t0);
+        ln.push_back(clock_ms() - t0);
         OctreeSampler sb(c.tex, &index);
-        t0 = now_ms();
+        t0 = clock_ms();
         sb.nearest_batch(xyz.data(), nrm.data(), pts.size(), outb.data());
-        lb.push_back(now_ms() - t0);
+        lb.push_back(clock_ms() - t0);
         // VDB nearest (the same world-to-index conversion).
         openvdb::Int32Grid::ConstAccessor acc = c.grid->getConstAccessor();
         uint64_t vsum = 0;
-        t0 = now_ms();
+        t0 = clock_ms();
         const double scale = double(1u << 10) / c.tex.size();
         for (const Sample& x : pts) {
           const openvdb::Coord ijk(int(std::floor((x.p[0] - c.tex.origin()[0]) * scale)),
@@ -486,7 +497,7 @@ int main(int argc, char** argv) {
           acc.probeValue(ijk, v);
           vsum += uint32_t(v);
         }
-        vn.push_back(now_ms() - t0);
+        vn.push_back(clock_ms() - t0);
         if (rep == 0) {
           // Agreement on the same points (cells with two sides differ only on the back).
           OctreeSampler s2(c.tex, &index);
@@ -505,26 +516,26 @@ int main(int argc, char** argv) {
         }
         // Trilinear.
         float acc4[4], total = 0;
-        t0 = now_ms();
+        t0 = clock_ms();
         for (const Sample& x : pts) {
           smp.filtered(x.p, x.n, 0.0f, acc4);
           total += acc4[0];
         }
-        lt.push_back(now_ms() - t0);
+        lt.push_back(clock_ms() - t0);
         OctreeSampler sfb(c.tex, &index);
-        t0 = now_ms();
+        t0 = clock_ms();
         sfb.filtered_batch(xyz.data(), nrm.data(), pts.size(), 0.0f, outf.data());
-        ltb.push_back(now_ms() - t0);
+        ltb.push_back(clock_ms() - t0);
         openvdb::Int32Grid::ConstAccessor acc2 = c.grid->getConstAccessor();
         float vtotal = 0;
-        t0 = now_ms();
+        t0 = clock_ms();
         for (const Sample& x : pts) {
           double u[3];
           c.tex.to_unit(x.p, u);
           vdb_trilinear(acc2, u, 10, acc4);
           vtotal += acc4[0];
         }
-        vt.push_back(now_ms() - t0);
+        vt.push_back(clock_ms() - t0);
         if (rep == 0 && dump) {
           // Every result of this repetition, and filtered one at a time from a fresh sampler.
           Hash hn, hb, hf, hfb;
@@ -582,9 +593,9 @@ int main(int argc, char** argv) {
         for (const Sample& x : at) {
           StrokePainter p(t, surf);
           p.begin(b);
-          const double t0 = a.cpu_clock ? cpu_ms() : now_ms();
+          const double t0 = clock_ms();
           p.dab_world(x.p);
-          const double ms = (a.cpu_clock ? cpu_ms() : now_ms()) - t0;
+          const double ms = clock_ms() - t0;
           const StrokeStats st = p.end();
           (pass ? second : first).push_back(ms);
           if (pass) changed += st.samples_changed, rays += st.rays;
