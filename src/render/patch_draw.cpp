@@ -275,8 +275,9 @@ std::string with_header(int cvs, const char* a, const char* b = "", const char* 
 
 // Scratch space of line_rates, kept between draws.
 struct RateScratch {
-  std::vector<float> reach;   // per cage vertex
-  std::vector<uint8_t> seen;  // per cage edge: beside a face that may be in view
+  std::vector<float> reach;        // per cage vertex
+  std::vector<uint8_t> seen;       // per cage edge: beside a face that may be in view
+  std::vector<uint8_t> face_seen;  // per cage face: may be in view
 };
 
 // The level-0 rate of every cage line for this view: segments per cage edge (its projected
@@ -320,6 +321,7 @@ void line_rates(const Mesh& cage, const Topology& topo, const Camera& camera, fl
   }
   std::vector<uint8_t>& seen = scratch.seen;
   seen.assign(ne, 0);
+  scratch.face_seen.assign(nf, 0);
   for (size_t f = 0; f < nf; ++f) {
     const uint32_t b = cage.face_offsets[f], n = cage.face_size(f);
     float centre[3] = {0, 0, 0};
@@ -331,6 +333,7 @@ void line_rates(const Mesh& cage, const Topology& topo, const Camera& camera, fl
       radius = std::max(radius, dist(centre, pos(v)) + double(reach[v]));
     }
     if (camera.ball_outside(centre, 1.01 * radius + 1e-6)) continue;  // out[ne + f] stays 0
+    scratch.face_seen[f] = 1;
     float m = 0;
     for (uint32_t c = b; c < b + n; ++c) {
       m = std::max(m, out[topo.corner_edge[c]]);
@@ -368,6 +371,9 @@ gl::Program capture_program(std::string_view name, const std::string& vs, const 
 
 }  // namespace
 
+// Patches per run that draw() leaves out when all their faces are out of view.
+constexpr size_t kCullRun = 32;
+
 struct PatchDrawer::Impl {
   const Mesh* cage = nullptr;
   Topology topo;
@@ -386,6 +392,7 @@ struct PatchDrawer::Impl {
   gl::Renderbuffer capture_rb;
   std::vector<float> rates;
   RateScratch rate_scratch;
+  std::vector<uint32_t> patch_face;  // cage face of each patch (regular, then end caps)
   Box bounds;
   // Patches per draw call. llvmpipe (Mesa 22.3) mixes up the tessellation of patches whose
   // levels differ once a draw holds more than about 60 patches (every patch still evaluated, but
@@ -449,9 +456,12 @@ void PatchDrawer::upload_patches(const PatchTable& table) {
   m.gregory = table.gregory_params.size();
   std::vector<PatchInfo> infos;
   infos.reserve(m.regular + m.gregory);
+  m.patch_face.clear();
+  m.patch_face.reserve(m.regular + m.gregory);
   const uint32_t ne = uint32_t(m.topo.edge_count());
   for (const auto* params : {&table.regular_params, &table.gregory_params})
     for (const PatchParam& pp : *params) {
+      m.patch_face.push_back(pp.base_face);
       PatchInfo in{};
       const uint32_t f = pp.base_face, b = cage.face_offsets[f], n = cage.face_size(f);
       const uint32_t last = (1u << pp.depth) - 1;
@@ -546,9 +556,25 @@ DrawStats PatchDrawer::draw(const Camera& camera, const DrawOptions& o) {
     glUniform3fv(glGetUniformLocation(prog, "ramp"), 17, ramp);
     if (o.texture) o.texture->bind(prog, o.texture_nearest ? 1 : 2);
     glPatchParameteri(GL_PATCH_VERTICES, cvs);
-    for (size_t first = 0; first < count; first += m.chunk)
-      glDrawArrays(GL_PATCHES, GLint(first * size_t(cvs)),
-                   GLsizei(std::min(m.chunk, count - first) * size_t(cvs)));
+    // Runs of kCullRun patches whose faces are all out of view are left out; the rest is drawn
+    // in runs of at most m.chunk patches.
+    const uint32_t* face = m.patch_face.data() + (pass ? m.regular : 0);
+    const std::vector<uint8_t>& seen = m.rate_scratch.face_seen;
+    size_t begin = 0, end = 0;  // the run of patches to draw, not yet drawn
+    auto flush = [&] {
+      for (size_t first = begin; first < end; first += m.chunk)
+        glDrawArrays(GL_PATCHES, GLint(first * size_t(cvs)),
+                     GLsizei(std::min(m.chunk, end - first) * size_t(cvs)));
+    };
+    for (size_t first = 0; first < count; first += kCullRun) {
+      const size_t last = std::min(first + kCullRun, count);
+      bool any = false;
+      for (size_t p = first; p < last && !any; ++p) any = seen[face[p]] != 0;
+      if (!any) continue;
+      if (first != end) flush(), begin = first;
+      end = last;
+    }
+    flush();
   }
   const auto [ns, prims] = m.queries.end();
   glBindVertexArray(0);

@@ -181,9 +181,10 @@ TEST(Render, CoverageMatchesCpuTessellation) {
   }
 }
 
-// Close over a terrain most patches lie out of view: they get one segment per edge; a patch with
-// a point in view drawn with one segment per edge must be small on screen (its line shorter than
-// 8 px x sqrt 2 at level 0, so each edge under 12 px), as without the culling.
+// Close over a terrain most patches lie out of view: they get one segment per edge (and a draw
+// leaves out runs of them); a patch with a point in view drawn with one segment per edge must be
+// small on screen (its line shorter than 8 px x sqrt 2 at level 0, so each edge under 12 px), as
+// without the culling.
 TEST(Render, PatchesOutOfViewAreCoarse) {
   context();
   const Case c = make_case("shape:terrain-small", 2, false);
@@ -223,6 +224,24 @@ TEST(Render, PatchesOutOfViewAreCoarse) {
   EXPECT_GT(fine, 10u);
   EXPECT_GT(seen, fine / 2);
   EXPECT_GT(coarse, n / 2);
+  // A draw leaves out runs of patches wholly out of view (capture draws them all), and what it
+  // draws covers what the CPU tessellation covers.
+  RenderTarget target(cam.width, cam.height, 1);
+  const float white[4] = {1, 1, 1, 1};
+  target.begin(white);
+  const DrawStats st = drawer.draw(cam, DrawOptions{});
+  EXPECT_LT(st.triangles, cap.coords.size() / 3);
+  const std::vector<uint8_t> a = mask(target.read_rgba());
+  TessellateOptions to;
+  to.factor = 8;
+  MeshDrawer cpu(tessellate_patches(c.cage, c.table, c.points, to));
+  target.begin(white);
+  cpu.draw(cam, DrawOptions{});
+  const std::vector<uint8_t> b = mask(target.read_rgba());
+  size_t differ = 0, covered = 0;
+  for (size_t i = 0; i < a.size(); ++i) differ += a[i] != b[i], covered += a[i] || b[i];
+  EXPECT_GT(covered, size_t(cam.width * cam.height / 2));
+  EXPECT_LE(double(differ), 0.01 * double(covered));
 }
 
 // The drawing options are compiled into programs of their own (one per combination, made at its
