@@ -620,6 +620,39 @@ int main(int argc, char** argv) {
       std::fflush(stdout);
     }
   }
+  if (dump && do_dabs) {
+    // Screen dabs through cameras (rays toward the eye, not along the normal): strokes across
+    // each model from three sides, hashed as above.
+    for (const std::string& name : names) {
+      const Mesh mesh = read_mesh(a.models / name);
+      const PaintSurface surf(mesh);
+      OctreeTexture t = OctreeTexture::create(surf);
+      Brush b;
+      b.depth = 10, b.radius = 12, b.hardness = 0.3f, b.spacing = 0.5f;
+      size_t changed = 0, rays = 0;
+      for (int view = 0; view < 3; ++view) {
+        PaintCamera cam;
+        cam.width = 640, cam.height = 480, cam.fovy_deg = 40;
+        for (int k = 0; k < 3; ++k)
+          cam.target[k] = t.origin()[k] + 0.5f * t.size(), cam.eye[k] = cam.target[k];
+        cam.eye[view == 0 ? 2 : view == 1 ? 0 : 1] += (view == 1 ? -1.6f : 1.6f) * t.size();
+        if (view == 2) cam.up[0] = 0, cam.up[1] = 0, cam.up[2] = 1;
+        b.color[0] = 0.3f * float(view), b.color[1] = 0.8f;
+        StrokePainter p(t, surf);
+        p.begin(b, &cam);
+        std::vector<double> xy;
+        for (int i = 0; i <= 40; ++i)
+          xy.push_back(120.0 + 10.0 * i), xy.push_back(240.0 + 60.0 * std::sin(0.2 * i));
+        p.stroke_screen(xy);
+        const StrokeStats st = p.end();
+        changed += st.samples_changed, rays += st.rays;
+      }
+      Hash words;
+      for (uint32_t w : t.words()) words.add(w);
+      fmt::print(dump, "screen {} samples {:016x} pool {:016x} changed {}\n",
+                 fs::path(name).stem().string(), sample_hash(t), words.h, changed);
+    }
+  }
   if (dump) std::fclose(dump);
   return 0;
 }
