@@ -273,41 +273,23 @@ std::string with_header(int cvs, const char* a, const char* b = "", const char* 
   return fmt::format("#version 450 core\n#define CVS {}\n{}{}{}{}", cvs, a, b, c, d);
 }
 
-// Scratch space of line_rates, kept between draws.
+// What line_rates keeps between draws: per cage face a ball holding every point its patches are
+// made from (the vertices of the faces around its corners, each within half that face's
+// perimeter of the corner; subdivision only averages them), view-independent, and scratch.
 struct RateScratch {
-  std::vector<float> reach;        // per cage vertex
+  std::vector<float> ball;         // per cage face: centre x, y, z, radius
   std::vector<uint8_t> seen;       // per cage edge: beside a face that may be in view
   std::vector<uint8_t> face_seen;  // per cage face: may be in view
 };
 
-// The level-0 rate of every cage line for this view: segments per cage edge (its projected
-// length over `pixels_per_segment`), then per cage face the largest of its edges'. Lines that
-// only border faces wholly out of view get 1 segment: a face is out of view when a ball around
-// its centroid holding every point its patches are made from (the vertices of the faces around
-// its corners, each within half that face's perimeter of the corner; subdivision only averages
-// them) lies outside the view. Every patch of a face that may be seen keeps its rates, and rates
-// stay per line, so shared edges still agree.
-void line_rates(const Mesh& cage, const Topology& topo, const Camera& camera, float pps,
-                std::vector<float>& out, RateScratch& scratch) {
-  const size_t ne = topo.edge_count(), nf = cage.face_count();
-  out.assign(ne + nf, 0.0f);
+void face_balls(const Mesh& cage, RateScratch& scratch) {
+  const size_t nf = cage.face_count();
   auto pos = [&](uint32_t v) { return &cage.positions[3 * size_t(v)]; };
   auto dist = [](const float* a, const float* b) {
     return std::sqrt(double(a[0] - b[0]) * (a[0] - b[0]) + double(a[1] - b[1]) * (a[1] - b[1]) +
                      double(a[2] - b[2]) * (a[2] - b[2]));
   };
-  for (size_t e = 0; e < ne; ++e) {
-    const float* a = pos(topo.edge_vertices[2 * e]);
-    const float* b = pos(topo.edge_vertices[2 * e + 1]);
-    double ax, ay, bx, by;
-    if (!camera.project(a, ax, ay) || !camera.project(b, bx, by)) {
-      out[e] = 1e6f;  // reaches behind the eye: as fine as it goes
-      continue;
-    }
-    out[e] = float(std::hypot(ax - bx, ay - by) / double(pps));
-  }
-  std::vector<float>& reach = scratch.reach;
-  reach.assign(cage.vertex_count(), 0.0f);
+  std::vector<float> reach(cage.vertex_count(), 0.0f);
   for (size_t f = 0; f < nf; ++f) {
     const uint32_t b = cage.face_offsets[f], n = cage.face_size(f);
     double half = 0;
@@ -319,12 +301,10 @@ void line_rates(const Mesh& cage, const Topology& topo, const Camera& camera, fl
       r = std::max(r, float(half));
     }
   }
-  std::vector<uint8_t>& seen = scratch.seen;
-  seen.assign(ne, 0);
-  scratch.face_seen.assign(nf, 0);
+  scratch.ball.assign(4 * nf, 0.0f);
   for (size_t f = 0; f < nf; ++f) {
     const uint32_t b = cage.face_offsets[f], n = cage.face_size(f);
-    float centre[3] = {0, 0, 0};
+    float* centre = &scratch.ball[4 * f];
     for (uint32_t c = 0; c < n; ++c)
       for (int k = 0; k < 3; ++k) centre[k] += pos(cage.face_vertices[b + c])[k] / float(n);
     double radius = 0;
@@ -332,10 +312,39 @@ void line_rates(const Mesh& cage, const Topology& topo, const Camera& camera, fl
       const uint32_t v = cage.face_vertices[b + c];
       radius = std::max(radius, dist(centre, pos(v)) + double(reach[v]));
     }
-    if (camera.ball_outside(centre, 1.01 * radius + 1e-6)) continue;  // out[ne + f] stays 0
+    centre[3] = float(1.01 * radius + 1e-6);
+  }
+}
+
+// The level-0 rate of every cage line for this view: segments per cage edge (its projected
+// length over `pixels_per_segment`), then per cage face the largest of its edges'. Lines that
+// only border faces wholly out of view (their balls outside the view) get 1 segment: every patch
+// of a face that may be seen keeps its rates, and rates stay per line, so shared edges still
+// agree.
+void line_rates(const Mesh& cage, const Topology& topo, const Camera& camera, float pps,
+                std::vector<float>& out, RateScratch& scratch) {
+  const size_t ne = topo.edge_count(), nf = cage.face_count();
+  out.assign(ne + nf, 0.0f);
+  for (size_t e = 0; e < ne; ++e) {
+    const float* a = &cage.positions[3 * size_t(topo.edge_vertices[2 * e])];
+    const float* b = &cage.positions[3 * size_t(topo.edge_vertices[2 * e + 1])];
+    double ax, ay, bx, by;
+    if (!camera.project(a, ax, ay) || !camera.project(b, bx, by)) {
+      out[e] = 1e6f;  // reaches behind the eye: as fine as it goes
+      continue;
+    }
+    out[e] = float(std::hypot(ax - bx, ay - by) / double(pps));
+  }
+  if (scratch.ball.size() != 4 * nf) face_balls(cage, scratch);
+  std::vector<uint8_t>& seen = scratch.seen;
+  seen.assign(ne, 0);
+  scratch.face_seen.assign(nf, 0);
+  for (size_t f = 0; f < nf; ++f) {
+    const float* ball = &scratch.ball[4 * f];
+    if (camera.ball_outside(ball, ball[3])) continue;  // out[ne + f] stays 0
     scratch.face_seen[f] = 1;
     float m = 0;
-    for (uint32_t c = b; c < b + n; ++c) {
+    for (uint32_t c = cage.face_offsets[f]; c < cage.face_offsets[f + 1]; ++c) {
       m = std::max(m, out[topo.corner_edge[c]]);
       seen[topo.corner_edge[c]] = 1;
     }
@@ -512,7 +521,8 @@ void PatchDrawer::set_points(std::span<const float> points) {
                                  points.size(), m.max_index));
   gl::upload(m.points, m.points_cap, points.data(), points.size() * sizeof(float));
   m.point_floats = points.size();
-  m.bounds = Box{};  // near and far planes come from the points' bounds
+  face_balls(*m.cage, m.rate_scratch);  // the cage may have moved with its points
+  m.bounds = Box{};                     // near and far planes come from the points' bounds
   for (size_t i = 0; i + 2 < points.size(); i += 3)
     for (int k = 0; k < 3; ++k)
       m.bounds.min[k] = std::min(m.bounds.min[k], points[i + size_t(k)]),
