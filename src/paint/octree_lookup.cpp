@@ -236,7 +236,8 @@ LIMN_WALK uint32_t brick_taps(const uint32_t* pool, uint32_t word, const uint32_
 // boundary) are read from it together once the cache holds it; the others are nearest walks
 // sharing the cache.
 LIMN_WALK bool walk_trilinear(const uint32_t* pool, const OctreeIndex* index, Cache& cache,
-                              const double u[3], int level, const float* n, float acc[5]) {
+                              const double u[3], int level, const float* n, float acc[5],
+                              int& deepest) {
   const double cells = double(1u << level);
   int64_t i0[3];
   double wt[3][2];
@@ -261,7 +262,10 @@ LIMN_WALK bool walk_trilinear(const uint32_t* pool, const OctreeIndex* index, Ca
     const uint32_t x = (uint32_t(ic[0]) << shift) + half, y = (uint32_t(ic[1]) << shift) + half,
                    z = (uint32_t(ic[2]) << shift) + half;
     int ended = 0;
-    if (walk_nearest(pool, index, cache, x, y, z, n, col[corner], &ended)) found |= 1u << corner;
+    if (walk_nearest(pool, index, cache, x, y, z, n, col[corner], &ended)) {
+      found |= 1u << corner;
+      deepest = std::max(deepest, ended);  // a finer leaf's sample (bricks' are at `level`)
+    }
     return ended;
   };
   if (level < 2) {
@@ -351,13 +355,15 @@ LIMN_WALK bool walk_trilinear(const uint32_t* pool, const OctreeIndex* index, Ca
 __attribute__((target("popcnt"))) bool walk_trilinear_popcnt(const uint32_t* pool,
                                                              const OctreeIndex* index, Cache& cache,
                                                              const double u[3], int level,
-                                                             const float* n, float acc[5]) {
-  return walk_trilinear(pool, index, cache, u, level, n, acc);
+                                                             const float* n, float acc[5],
+                                                             int& deepest) {
+  return walk_trilinear(pool, index, cache, u, level, n, acc, deepest);
 }
 
 bool walk_trilinear_generic(const uint32_t* pool, const OctreeIndex* index, Cache& cache,
-                            const double u[3], int level, const float* n, float acc[5]) {
-  return walk_trilinear(pool, index, cache, u, level, n, acc);
+                            const double u[3], int level, const float* n, float acc[5],
+                            int& deepest) {
+  return walk_trilinear(pool, index, cache, u, level, n, acc, deepest);
 }
 
 // A filtered lookup at p's leaf level: finds the level (a walk that reads no sample, leaving p's
@@ -378,9 +384,19 @@ LIMN_WALK int walk_filtered(const uint32_t* pool, const OctreeIndex* index, Cach
     Rgba8 unused;
     walk_nearest<false>(pool, index, cache, c[0], c[1], c[2], n, unused, &leaf_level);
   }
-  const double leaf_size = size / double(1u << leaf_level);
-  if (footprint > leaf_size && std::isfinite(footprint)) return -1;
-  return walk_trilinear(pool, index, cache, u, leaf_level, n, acc);
+  // Where a tap reads the sample of a finer leaf, p sits in a coarse leaf beside finer ones
+  // (the texture is deep only where it was painted): the taps of p's level would reach a whole
+  // coarse cell away and read points of that detail. Filter at the finer level instead, until
+  // no tap finds a finer leaf: the filter stays local and continuous into the finer leaves.
+  for (;;) {
+    const double leaf_size = size / double(1u << leaf_level);
+    if (footprint > leaf_size && std::isfinite(footprint)) return -1;
+    int deepest = leaf_level;
+    const bool any = walk_trilinear(pool, index, cache, u, leaf_level, n, acc, deepest);
+    if (deepest <= leaf_level) return any;
+    leaf_level = deepest;
+    std::fill(acc, acc + 5, 0.0f);
+  }
 }
 
 __attribute__((target("popcnt"))) int walk_filtered_popcnt(const uint32_t* pool,
@@ -558,9 +574,11 @@ bool OctreeSampler::cell_value(uint32_t x, uint32_t y, uint32_t z, int level, co
 bool OctreeSampler::trilinear(const double u[3], int level, const float* n, bool averages,
                               float acc[5]) {
   const uint32_t* pool = t_->words().data();
-  if (!averages)
-    return kPopcnt ? walk_trilinear_popcnt(pool, index_, cache_, u, level, n, acc)
-                   : walk_trilinear_generic(pool, index_, cache_, u, level, n, acc);
+  if (!averages) {
+    int deepest = level;
+    return kPopcnt ? walk_trilinear_popcnt(pool, index_, cache_, u, level, n, acc, deepest)
+                   : walk_trilinear_generic(pool, index_, cache_, u, level, n, acc, deepest);
+  }
   // Mip levels (node averages): not the hot path.
   const double cells = double(1u << level);
   int64_t i0[3];

@@ -201,7 +201,9 @@ bool oct_cell_value(uvec3 c, int level, vec3 n, out uint col) {
 }
 
 // The 8 taps around u at `level`: acc = premultiplied rgb, alpha; weight in acc_w.
-bool oct_trilinear(dvec3 u, int level, vec3 n, bool averages, inout vec4 acc, inout float acc_w) {
+// deepest: rises to the level of a finer leaf whose sample a tap read (leaf taps only).
+bool oct_trilinear(dvec3 u, int level, vec3 n, bool averages, inout vec4 acc, inout float acc_w,
+                   inout int deepest) {
   double cells = double(1u << level);
   dvec3 g = u * cells - 0.5;
   dvec3 f = floor(g);
@@ -226,6 +228,7 @@ bool oct_trilinear(dvec3 u, int level, vec3 n, bool averages, inout vec4 acc, in
     int lv;
     bool found = averages ? oct_cell_value(x, level, n, c) : oct_nearest_at(x, n, c, lv);
     if (!found) continue;
+    if (!averages) deepest = max(deepest, lv);
     float a = float(c >> 24) / 255.0, fw = float(w);
     acc.r += fw * a * float(c & 255u) / 255.0;
     acc.g += fw * a * float((c >> 8) & 255u) / 255.0;
@@ -268,18 +271,31 @@ bool oct_filtered(vec3 p, vec3 n, float footprint, out vec4 rgba) {
   vec4 acc = vec4(0.0);
   float acc_w = 0.0;
   bool hit;
-  double leaf_size = double(oct_size) / double(1u << leaf_level);
-  if (!(double(footprint) > leaf_size) || isinf(footprint) || isnan(footprint)) {
-    hit = oct_trilinear(u, leaf_level, n, false, acc, acc_w);
-  } else {
+  // OctreeSampler::filtered: a tap reading a finer leaf's sample moves the filter to that level.
+  bool mip = false;
+  for (;;) {
+    double leaf_size = double(oct_size) / double(1u << leaf_level);
+    if (double(footprint) > leaf_size && !isinf(footprint) && !isnan(footprint)) {
+      mip = true;
+      break;
+    }
+    acc = vec4(0.0);
+    acc_w = 0.0;
+    int deepest = leaf_level;
+    hit = oct_trilinear(u, leaf_level, n, false, acc, acc_w, deepest);
+    if (deepest <= leaf_level) break;
+    leaf_level = deepest;
+  }
+  if (mip) {
+    int unused = 0;
     float lf = clamp(log2(oct_size / footprint), 0.0, float(leaf_level));
     int l0 = int(floor(lf));
     float frac = lf - float(l0);
     vec4 a0 = vec4(0.0), a1 = vec4(0.0);
     float w0s = 0.0, w1s = 0.0;
-    bool h0 = oct_trilinear(u, l0, n, true, a0, w0s);
+    bool h0 = oct_trilinear(u, l0, n, true, a0, w0s, unused);
     bool h1 = frac > 0.0 && l0 + 1 <= leaf_level &&
-              oct_trilinear(u, l0 + 1, n, l0 + 1 < leaf_level, a1, w1s);
+              oct_trilinear(u, l0 + 1, n, l0 + 1 < leaf_level, a1, w1s, unused);
     hit = h0 || h1;
     vec4 v0 = w0s > 0.0 ? a0 / w0s : vec4(0.0), v1 = w1s > 0.0 ? a1 / w1s : vec4(0.0);
     float w0 = h0 ? 1.0 - frac : 0.0, w1 = h1 ? frac : 0.0;

@@ -249,9 +249,10 @@ struct CellMap {
     out = c->s[side];
     return true;
   }
-  /// Reference trilinear lookup at the level of the leaf holding p: the 8 cells around p at that
-  /// level, each read as a nearest lookup at its centre, premultiplied, weights renormalised over
-  /// the cells with a sample facing n. False when no leaf holds p or no tap has a sample.
+  /// Reference trilinear lookup: the 8 cells around p at a level, each read as a nearest lookup
+  /// at its centre, premultiplied, weights renormalised over the cells with a sample facing n.
+  /// The level starts at the leaf holding p's and goes down to the deepest leaf whose sample a
+  /// tap read, until no tap reads a deeper one. False when no leaf holds p or no tap has a sample.
   bool filtered(const float p[3], const float* n, float out[4]) const {
     uint32_t xyz[3];
     double u[3];
@@ -264,6 +265,19 @@ struct CellMap {
     int level = 0;
     if (!leaf(xyz[0], xyz[1], xyz[2], &level)) return false;
     double acc[5] = {0, 0, 0, 0, 0};
+    for (int deepest = level;; level = deepest) {
+      std::fill(acc, acc + 5, 0.0);
+      taps(u, level, n, acc, deepest);
+      if (deepest <= level) break;
+    }
+    if (!(acc[4] > 0)) return false;
+    for (int k = 0; k < 3; ++k) out[k] = acc[3] > 0 ? float(acc[k] / acc[3]) : 0.0f;
+    out[3] = float(acc[3] / acc[4]);
+    return true;
+  }
+  /// The 8 taps of `filtered` at `level`; `deepest` rises to the level of any deeper leaf whose
+  /// sample a tap read.
+  void taps(const double u[3], int level, const float* n, double acc[5], int& deepest) const {
     const double n_cells = double(1u << level);
     for (int corner = 0; corner < 8; ++corner) {
       double w = 1;
@@ -279,20 +293,18 @@ struct CellMap {
       if (!inside || w <= 0) continue;
       const int sh = 16 - level;
       const uint32_t half = sh ? 1u << (sh - 1) : 0;
+      int at = 0;
       const Cell* c = leaf((uint32_t(ic[0]) << sh) + half, (uint32_t(ic[1]) << sh) + half,
-                           (uint32_t(ic[2]) << sh) + half);
+                           (uint32_t(ic[2]) << sh) + half, &at);
       if (!c) continue;
       const int side = side_of(c->tag, n);
       if (side && !c->dbl) continue;
+      deepest = std::max(deepest, at);
       const Rgba8 col = c->s[side];
       const double a = channel(col, 3) / 255.0;
       for (int k = 0; k < 3; ++k) acc[k] += w * a * channel(col, k) / 255.0;
       acc[3] += w * a, acc[4] += w;
     }
-    if (!(acc[4] > 0)) return false;
-    for (int k = 0; k < 3; ++k) out[k] = acc[3] > 0 ? float(acc[k] / acc[3]) : 0.0f;
-    out[3] = float(acc[3] / acc[4]);
-    return true;
   }
 };
 

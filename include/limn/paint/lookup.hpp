@@ -50,8 +50,11 @@ class OctreeSampler {
   bool nearest(const float p[3], const float* n, Rgba8& out, int* level = nullptr);
 
   /// Filtered: trilinear over the 8 cells around p at the level of p's leaf, each tap a nearest
-  /// lookup (so coarser leaves count once per tap and finer ones by the sample at the tap),
-  /// premultiplied by alpha, with the weights renormalised over taps that have a sample facing n:
+  /// lookup (so coarser leaves count once per tap), premultiplied by alpha, at a finer level
+  /// wherever a tap reads the sample of a finer leaf (p in a coarse leaf beside finer ones: the
+  /// level rises to that leaf's until no tap finds a finer one, so the filter never reaches a
+  /// coarse cell away into painted detail), with the weights renormalised over taps that have a
+  /// sample facing n:
   /// samples of a sheet facing the other way never leak in. `footprint` (world units, 0: none):
   /// when wider than the leaf, the mip levels the footprint spans (node averages) are blended
   /// trilinearly instead; averages ignore sides. Out: straight RGBA in [0,1]. False (rgba = 0)

@@ -1,0 +1,149 @@
+// Filtered lookups where leaf depths change: a texture is deep only where it was painted, so a
+// point on the surface can sit in a coarse leaf right beside fine painted ones. The filter must
+// stay local there (the taps of a coarse level reach a whole coarse cell away, and a fine tap's
+// sample is a point of the painted detail, not the cell's colour), and the GPU must do the same.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "limn/paint/brush.hpp"
+#include "limn/paint/lookup.hpp"
+#include "limn/paint/surface.hpp"
+#include "limn/paint/texture.hpp"
+#include "limn/render/gl_context.hpp"
+#include "limn/render/texture.hpp"
+#include "paint_oracle.hpp"
+
+namespace limn {
+namespace {
+
+// One hard red dab of radius 0.3 at depth 9 in the middle of a sheet over [-1, 1]^2 at z = 0
+// (leaves of 2.04 / 512 = 0.004 there); everywhere else the start tree's coarse leaves, opaque
+// white. A patch at z = 2.04 / 32 moves the cube so that the sheet runs through the middle of
+// level-5 cells: taps at the centres of the level-5 cells beside a coarse leaf then land on the
+// sheet (a surface through cell boundaries, as at z = 0 of a centred cube, would hide them).
+struct DabOnSheet {
+  Mesh sheet = test::merge(
+      {test::sheet(-1, 1, -1, 1, 0, 8, true), test::sheet(0.95, 1, 0.95, 1, 2.04 / 32, 1, true)});
+  PaintSurface surface{sheet};
+  OctreeTexture tex = OctreeTexture::create(surface, pack_rgba8(255, 255, 255, 255));
+  float leaf = 0;
+  DabOnSheet() {
+    Brush b;
+    b.depth = 9, b.radius = 0.3f, b.hardness = 1;
+    b.color[0] = 1, b.color[1] = 0, b.color[2] = 0, b.color[3] = 1;
+    StrokePainter p(tex, surface);
+    p.begin(b);
+    const float at[3] = {0, 0, 0};
+    p.dab_world(at);
+    p.end();
+    leaf = tex.size() / 512.0f;
+  }
+};
+
+TEST(PaintFilter, CoarseLeavesBesideFinePaintStayTheirOwnColour) {
+  const DabOnSheet d;
+  const double cells = (0.0 - d.tex.origin()[2]) / d.tex.size() * 32.0;
+  ASSERT_NEAR(cells - std::floor(cells), 0.5, 0.01) << "the sheet should cross level-5 centres";
+  OctreeSampler s(d.tex);
+  const float up[3] = {0, 0, 1};
+  // Points on the sheet in rings around the dab: beyond it by more than the filter's reach at
+  // the dab's depth (one leaf, plus one for the dab's own edge) the colour is the white base.
+  size_t coarse = 0, checked = 0;
+  for (int i = 0; i < 4000; ++i) {
+    const double a = 2 * M_PI * i / 4000.0, r = 0.3 + d.leaf * (2.5 + 40.0 * (i % 97) / 97.0);
+    const float p[3] = {float(r * std::cos(a)), float(r * std::sin(a)), 0};
+    Rgba8 c;
+    int level = 0;
+    ASSERT_TRUE(s.nearest(p, up, c, &level));
+    ASSERT_EQ(c, pack_rgba8(255, 255, 255, 255)) << "the dab reached r = " << r;
+    coarse += level < 9;
+
+    float rgba[4];
+    ASSERT_TRUE(s.filtered(p, up, 0.0f, rgba));
+    for (int k = 0; k < 4; ++k)
+      ASSERT_NEAR(rgba[k], 1.0f, 1e-6) << "r = " << r << " level " << level << " channel " << k;
+    ++checked;
+  }
+  EXPECT_GT(coarse, checked / 2) << "the points should mostly lie in coarse leaves";
+}
+
+TEST(PaintFilter, ContinuousFromCoarseLeavesIntoFineOnes) {
+  const DabOnSheet d;
+  OctreeSampler s(d.tex);
+  const float up[3] = {0, 0, 1};
+  // Along rays from the dab's centre out into the coarse leaves, steps of 0.05 leaf: trilinear
+  // at the dab's depth changes a channel by at most one per leaf (0.05 a step); a switch of level
+  // would jump.
+  for (int ray = 0; ray < 16; ++ray) {
+    const double a = 2 * M_PI * (ray + 0.37) / 16.0;
+    float last[4] = {1, 0, 0, 1};
+    int levels_seen = 0, prev_level = -1;
+    for (double r = 0.0; r < 0.3 + 30 * d.leaf; r += 0.05 * d.leaf) {
+      const float p[3] = {float(r * std::cos(a)), float(r * std::sin(a)), 0};
+      float rgba[4];
+      ASSERT_TRUE(s.filtered(p, up, 0.0f, rgba));
+      for (int k = 0; k < 4; ++k)
+        ASSERT_LE(std::abs(rgba[k] - last[k]), 0.08f) << "ray " << ray << " r " << r << " " << k;
+      std::copy(rgba, rgba + 4, last);
+      Rgba8 c;
+      int level = 0;
+      s.nearest(p, up, c, &level);
+      levels_seen += level != prev_level;
+      prev_level = level;
+    }
+    EXPECT_GE(levels_seen, 2) << "the ray should cross from fine leaves into coarse ones";
+  }
+}
+
+// The brute-force map agrees on mixed depths (its filter resolves at the finest leaf its taps
+// find, as the sampler's does), and so does the GPU.
+TEST(PaintFilter, MixedDepthsEqualTheMapAndTheGpu) {
+  const Mesh m = test::sheet(-1, 1, -1, 1, 0, 12, true);
+  const PaintSurface surface(m);
+  OctreeTexture t = OctreeTexture::create(surface, pack_rgba8(40, 80, 120, 255));
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u01(0, 1);
+  for (int i = 0; i < 40; ++i) {
+    Brush b;
+    b.depth = 5 + i % 5;
+    b.radius = 0.05f + 0.15f * u01(rng);
+    b.hardness = u01(rng);
+    for (float& c : b.color) c = u01(rng);
+    StrokePainter p(t, surface);
+    p.begin(b);
+    const float at[3] = {2 * u01(rng) - 1, 2 * u01(rng) - 1, 0};
+    p.dab_world(at);
+    p.end();
+  }
+  const test::CellMap map(t);
+  OctreeSampler s(t);
+  std::vector<float> pts, nrm;
+  std::vector<float> want;
+  std::vector<uint8_t> want_found;
+  for (int i = 0; i < 6000; ++i) {
+    const float p[3] = {2 * u01(rng) - 1, 2 * u01(rng) - 1, 0};
+    const float n[3] = {0, 0, i % 3 == 0 ? -1.0f : 1.0f};
+    float ref[4] = {0, 0, 0, 0}, got[4];
+    const bool hr = map.filtered(p, n, ref);
+    ASSERT_EQ(s.filtered(p, n, 0.0f, got), hr) << i;
+    for (int k = 0; k < 4 && hr; ++k) ASSERT_NEAR(got[k], ref[k], 2e-4) << i << " " << k;
+    pts.insert(pts.end(), p, p + 3);
+    nrm.insert(nrm.end(), n, n + 3);
+    want.insert(want.end(), got, got + 4);
+    want_found.push_back(hr);
+  }
+  GlContext ctx;
+  const GpuOctreeTexture gpu(t);
+  const GpuOctreeTexture::Lookups l = gpu.lookup(pts, nrm, 0.0f);
+  for (size_t i = 0; i < want_found.size(); ++i) {
+    ASSERT_EQ(bool(l.filtered_found[i]), bool(want_found[i])) << i;
+    for (int k = 0; k < 4; ++k) ASSERT_NEAR(l.filtered[4 * i + k], want[4 * i + k], 2e-3) << i;
+  }
+}
+
+}  // namespace
+}  // namespace limn
