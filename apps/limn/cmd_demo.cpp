@@ -73,8 +73,8 @@ std::vector<float> cluster_colors(std::span<const uint32_t> face_cluster) {
   return out;
 }
 
-// A stroke around the z axis at z = height: for each of `bins` angles, the surface vertex nearest
-// that height among those in the angle's wedge (and within `band` of the height).
+// A closed stroke around the z axis at z = height: for each of `bins` angles, the surface vertex
+// nearest that height among those in the angle's wedge (and within `band` of the height).
 std::vector<float> ring_stroke(const Mesh& m, float height, float band, int bins = 180) {
   std::vector<std::pair<float, uint32_t>> best(size_t(bins), {band, kNone});
   for (uint32_t v = 0; v < m.vertex_count(); ++v) {
@@ -88,6 +88,8 @@ std::vector<float> ring_stroke(const Mesh& m, float height, float band, int bins
   for (const auto& [d, v] : best)
     if (v != kNone)
       xyz.insert(xyz.end(), &m.positions[3 * size_t(v)], &m.positions[3 * size_t(v)] + 3);
+  // Closed: back to the first point, so the stroke's dabs also cover the seam between them.
+  if (xyz.size() >= 6) xyz.insert(xyz.end(), xyz.begin(), xyz.begin() + 3);
   return xyz;
 }
 
