@@ -92,28 +92,14 @@ int main(int argc, char** argv) {
     limn2 = median_ms(limn_grid);
 
     // Far.
-    auto far_refiner = limn::bench::osd_refiner(cage);
-    Far::TopologyRefiner::AdaptiveOptions ao(depth);
-    far_refiner->RefineAdaptive(ao);
-    Far::PatchTableFactory::Options fo(depth);
-    fo.SetEndCapType(Far::PatchTableFactory::Options::ENDCAP_GREGORY_BASIS);
-    std::unique_ptr<Far::PatchTable> pt(Far::PatchTableFactory::Create(*far_refiner, fo));
+    const limn::bench::OsdAdaptive far = limn::bench::osd_adaptive(cage, depth, false, false);
+    const Far::PatchTable* pt = far.table.get();
     const Far::PatchMap far_map(*pt);
-    const int nrefined = far_refiner->GetNumVerticesTotal();
-    std::vector<P3> verts(size_t(nrefined + pt->GetNumLocalPoints()));
+    std::vector<P3> verts;
+    limn::bench::osd_points(far, cage, verts);  // sized (and touched) outside the timing
     tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
     const double far_ms = median_ms([&] {
-      for (size_t v = 0; v < cage.vertex_count(); ++v)
-        verts[v] = {cage.positions[3 * v], cage.positions[3 * v + 1], cage.positions[3 * v + 2]};
-      const Far::PrimvarRefiner pr(*far_refiner);
-      P3* src = verts.data();
-      for (int k = 1; k <= far_refiner->GetMaxLevel(); ++k) {
-        P3* dst = src + far_refiner->GetLevel(k - 1).GetNumVertices();
-        pr.Interpolate(k, src, dst);
-        src = dst;
-      }
-      if (pt->GetNumLocalPoints())
-        pt->ComputeLocalPointValues(verts.data(), verts.data() + nrefined);
+      limn::bench::osd_points(far, cage, verts);
       float wp[20], wu[20], wv[20];
       for (size_t f = 0; f < nf; ++f)
         for (size_t k = 0; k < per; ++k) {

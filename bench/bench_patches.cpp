@@ -93,16 +93,9 @@ struct OsdResult {
 
 OsdResult osd_build(const limn::Mesh& m, int depth, bool special) {
   const double t0 = now_ms();
-  std::unique_ptr<Far::TopologyRefiner> r = limn::bench::osd_refiner(m);
-  Far::TopologyRefiner::AdaptiveOptions ao(depth);
-  ao.useSingleCreasePatch = special;
-  ao.useInfSharpPatch = special;
-  r->RefineAdaptive(ao);
-  Far::PatchTableFactory::Options po(depth);
-  po.SetEndCapType(Far::PatchTableFactory::Options::ENDCAP_GREGORY_BASIS);
-  po.useSingleCreasePatch = special;
-  po.useInfSharpPatch = special;
-  std::unique_ptr<Far::PatchTable> pt(Far::PatchTableFactory::Create(*r, po));
+  const limn::bench::OsdAdaptive a = limn::bench::osd_adaptive(m, depth, special, special);
+  const Far::TopologyRefiner* r = a.refiner.get();
+  const Far::PatchTable* pt = a.table.get();
   Far::StencilTableFactory::Options sto;
   sto.generateIntermediateLevels = true;
   sto.generateOffsets = true;

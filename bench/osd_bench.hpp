@@ -71,4 +71,47 @@ inline std::unique_ptr<osd::Far::TopologyRefiner> osd_refiner(const Mesh& m) {
       Factory::Create(d, Factory::Options(osd::Sdc::SCHEME_CATMARK, so)));
 }
 
+/// Far's adaptive patch table of `m` at isolation `level` with Gregory-basis end caps, and the
+/// refiner it was made from (which its points need).
+struct OsdAdaptive {
+  std::unique_ptr<osd::Far::TopologyRefiner> refiner;
+  std::unique_ptr<osd::Far::PatchTable> table;
+};
+inline OsdAdaptive osd_adaptive(const Mesh& m, int level, bool single_crease, bool inf_sharp) {
+  namespace Far = osd::Far;
+  OsdAdaptive a;
+  a.refiner = osd_refiner(m);
+  Far::TopologyRefiner::AdaptiveOptions ao(level);
+  ao.useSingleCreasePatch = single_crease;
+  ao.useInfSharpPatch = inf_sharp;
+  a.refiner->RefineAdaptive(ao);
+  Far::PatchTableFactory::Options po(level);
+  po.SetEndCapType(Far::PatchTableFactory::Options::ENDCAP_GREGORY_BASIS);
+  po.useSingleCreasePatch = single_crease;
+  po.useInfSharpPatch = inf_sharp;
+  a.table.reset(Far::PatchTableFactory::Create(*a.refiner, po));
+  return a;
+}
+
+/// Every point `a`'s patches read, into `out` (sized by the caller: refined vertices of all
+/// levels, then the end caps' local points): the cage's, each level interpolated from the one
+/// before, then the local points. P: {x, y, z} with Clear() and AddWithWeight().
+template <class P>
+void osd_points(const OsdAdaptive& a, const Mesh& m, std::vector<P>& out) {
+  const osd::Far::TopologyRefiner& r = *a.refiner;
+  const size_t nrefined = size_t(r.GetNumVerticesTotal());
+  out.resize(nrefined + size_t(a.table->GetNumLocalPoints()));
+  for (size_t v = 0; v < m.vertex_count(); ++v)
+    out[v] = {m.positions[3 * v], m.positions[3 * v + 1], m.positions[3 * v + 2]};
+  const osd::Far::PrimvarRefiner pr(r);
+  P* src = out.data();
+  for (int k = 1; k <= r.GetMaxLevel(); ++k) {
+    P* dst = src + r.GetLevel(k - 1).GetNumVertices();
+    pr.Interpolate(k, src, dst);
+    src = dst;
+  }
+  if (a.table->GetNumLocalPoints())
+    a.table->ComputeLocalPointValues(out.data(), out.data() + nrefined);
+}
+
 }  // namespace limn::bench

@@ -53,35 +53,15 @@ class OsdGlDrawer {
   OsdGlDrawer(const Mesh& cage, int level) {
     namespace Far = osd::Far;
     single_crease_ = !cage.crease_sharpness.empty();
-    std::unique_ptr<Far::TopologyRefiner> r = osd_refiner(cage);
-    Far::TopologyRefiner::AdaptiveOptions ao(level);
-    ao.useSingleCreasePatch = single_crease_;
-    ao.useInfSharpPatch = true;
-    r->RefineAdaptive(ao);
-    Far::PatchTableFactory::Options po(level);
-    po.SetEndCapType(Far::PatchTableFactory::Options::ENDCAP_GREGORY_BASIS);
-    po.useSingleCreasePatch = single_crease_;
-    po.useInfSharpPatch = true;
-    std::unique_ptr<Far::PatchTable> pt(Far::PatchTableFactory::Create(*r, po));
-
+    const OsdAdaptive far = osd_adaptive(cage, level, single_crease_, true);
     // Refined points level by level, then the end caps' local points.
     struct P3 {
       float x, y, z;
       void Clear() { x = y = z = 0; }
       void AddWithWeight(const P3& o, float w) { x += w * o.x, y += w * o.y, z += w * o.z; }
     };
-    const int nrefined = r->GetNumVerticesTotal();
-    std::vector<P3> verts(size_t(nrefined + pt->GetNumLocalPoints()));
-    for (size_t v = 0; v < cage.vertex_count(); ++v)
-      verts[v] = {cage.positions[3 * v], cage.positions[3 * v + 1], cage.positions[3 * v + 2]};
-    const Far::PrimvarRefiner pr(*r);
-    P3* src = verts.data();
-    for (int k = 1; k <= r->GetMaxLevel(); ++k) {
-      P3* dst = src + r->GetLevel(k - 1).GetNumVertices();
-      pr.Interpolate(k, src, dst);
-      src = dst;
-    }
-    if (pt->GetNumLocalPoints()) pt->ComputeLocalPointValues(verts.data(), verts.data() + nrefined);
+    std::vector<P3> verts;
+    osd_points(far, cage, verts);
     for (const P3& p : verts)
       for (int k = 0; k < 3; ++k) {
         const float c = k == 0 ? p.x : k == 1 ? p.y : p.z;
@@ -90,7 +70,7 @@ class OsdGlDrawer {
 
     vertices_.reset(osd::Osd::GLVertexBuffer::Create(3, int(verts.size())));
     vertices_->UpdateData(&verts[0].x, 0, int(verts.size()));
-    table_.reset(osd::Osd::GLPatchTable::Create(pt.get()));
+    table_.reset(osd::Osd::GLPatchTable::Create(far.table.get()));
     if (!vertices_ || !table_) throw std::runtime_error("OpenSubdiv: GL buffers not created");
 
     glCreateVertexArrays(1, &vao_);
@@ -110,14 +90,12 @@ class OsdGlDrawer {
         stats_.gregory += size_t(a.GetNumPatches());
       else
         throw std::runtime_error("OpenSubdiv: no program for patch type " + std::to_string(type));
-      if (!programs_[slot(type)]) programs_[slot(type)] = build(type);
+      if (!programs_[slot(type)].get()) programs_[slot(type)] = build(type);
     }
     stats_.patches = stats_.regular + stats_.gregory;
     glCreateQueries(GL_PRIMITIVES_GENERATED, 1, &query_);
   }
   ~OsdGlDrawer() {
-    for (GLuint p : programs_)
-      if (p) glDeleteProgram(p);
     glDeleteVertexArrays(1, &vao_);
     glDeleteQueries(1, &query_);
   }
@@ -139,7 +117,7 @@ class OsdGlDrawer {
     glBindTexture(GL_TEXTURE_BUFFER, table_->GetPatchParamTextureBuffer());
     glBeginQuery(GL_PRIMITIVES_GENERATED, query_);
     for (const osd::Osd::PatchArray& a : table_->GetPatchArrays()) {
-      const GLuint prog = programs_[slot(a.GetDescriptor().GetType())];
+      const GLuint prog = programs_[slot(a.GetDescriptor().GetType())].get();
       const int cvs = a.GetDescriptor().GetNumControlVertices();
       glUseProgram(prog);
       glUniformMatrix4fv(glGetUniformLocation(prog, "u_view"), 1, GL_FALSE, view.data());
@@ -206,7 +184,7 @@ void main() {
 }
 )";
 
-  GLuint build(osd::Far::PatchDescriptor::Type type) const {
+  gl::Program build(osd::Far::PatchDescriptor::Type type) const {
     using Src = osd::Osd::GLSLPatchShaderSource;
     // With OpenSubdiv's frustum culling of patches (levels 0 for a patch whose control points
     // are all beyond one clip plane), as limn coarsens the patches of faces out of view.
@@ -216,43 +194,20 @@ void main() {
     if (single_crease_) head += "#define OSD_PATCH_ENABLE_SINGLE_CREASE\n";
     head += Src::GetCommonShaderSource();
     head += kClient;
-    const std::string stages[4] = {head + Src::GetVertexShaderSource(type),
-                                   head + Src::GetTessControlShaderSource(type),
-                                   head + Src::GetTessEvalShaderSource(type), head + kFragment};
-    const GLenum kinds[4] = {GL_VERTEX_SHADER, GL_TESS_CONTROL_SHADER, GL_TESS_EVALUATION_SHADER,
-                             GL_FRAGMENT_SHADER};
-    const GLuint prog = glCreateProgram();
-    for (int i = 0; i < 4; ++i) {
-      const GLuint sh = glCreateShader(kinds[i]);
-      const char* text = stages[i].c_str();
-      glShaderSource(sh, 1, &text, nullptr);
-      glCompileShader(sh);
-      GLint ok = 0;
-      glGetShaderiv(sh, GL_COMPILE_STATUS, &ok);
-      if (!ok) {
-        char log[4096];
-        glGetShaderInfoLog(sh, sizeof log, nullptr, log);
-        throw std::runtime_error("OpenSubdiv shader stage " + std::to_string(i) + ": " + log);
-      }
-      glAttachShader(prog, sh);
-      glDeleteShader(sh);
-    }
-    glLinkProgram(prog);
-    GLint ok = 0;
-    glGetProgramiv(prog, GL_LINK_STATUS, &ok);
-    if (!ok) {
-      char log[4096];
-      glGetProgramInfoLog(prog, sizeof log, nullptr, log);
-      throw std::runtime_error(std::string("OpenSubdiv program: ") + log);
-    }
-    return prog;
+    const std::string vs = head + Src::GetVertexShaderSource(type),
+                      tc = head + Src::GetTessControlShaderSource(type),
+                      te = head + Src::GetTessEvalShaderSource(type), fs = head + kFragment;
+    return gl::program("OpenSubdiv patches", {{GL_VERTEX_SHADER, vs},
+                                              {GL_TESS_CONTROL_SHADER, tc},
+                                              {GL_TESS_EVALUATION_SHADER, te},
+                                              {GL_FRAGMENT_SHADER, fs}});
   }
 
   bool single_crease_ = false;
   Box bounds_;
   std::unique_ptr<osd::Osd::GLVertexBuffer> vertices_;
   std::unique_ptr<osd::Osd::GLPatchTable> table_;
-  GLuint programs_[2] = {0, 0};
+  gl::Program programs_[2];
   GLuint vao_ = 0, query_ = 0;
   Stats stats_;
 };
