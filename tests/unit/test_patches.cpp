@@ -63,6 +63,14 @@ OsdAdaptive osd_adaptive(const Mesh& cage, int depth, const SubdivOptions& optio
   return a;
 }
 
+// 1 for each ptex face some patch covers (hole faces have none).
+std::vector<uint8_t> covered_ptex(const PatchTable& table) {
+  std::vector<uint8_t> covered(table.ptex_count, 0);
+  for (const auto* params : {&table.regular_params, &table.gregory_params})
+    for (const PatchParam& p : *params) covered[p.ptex] = 1;
+  return covered;
+}
+
 double bbox_diagonal(const Mesh& m) {
   return bounding_box(m).diagonal();
 }
@@ -90,9 +98,7 @@ Comparison compare_with_osd(const Mesh& cage, int depth, const SubdivOptions& op
   if (!oracle_cage) {
     EXPECT_EQ(int(table.patch_count()), ref.table->GetNumPatchesTotal());
   }
-  std::vector<uint8_t> covered(table.ptex_count, 0);
-  for (const auto* params : {&table.regular_params, &table.gregory_params})
-    for (const PatchParam& p : *params) covered[p.ptex] = 1;
+  const std::vector<uint8_t> covered = covered_ptex(table);
   const std::vector<float> pts = table.points(cage.positions);
   const PatchMap map(table);
   const osd::Far::PatchMap osd_map(*ref.table);
@@ -244,9 +250,7 @@ TEST(Patches, GridsEqualLookups) {
       std::vector<float> gp(3 * total, NAN), gu(3 * total, NAN), gv(3 * total, NAN);
       evaluate_grids(table, pts, n, gp.data(), gu.data(), gv.data());
       // Hole faces have no patches: their grid points stay as they were.
-      std::vector<uint8_t> covered(table.ptex_count, 0);
-      for (const auto* params : {&table.regular_params, &table.gregory_params})
-        for (const PatchParam& p : *params) covered[p.ptex] = 1;
+      const std::vector<uint8_t> covered = covered_ptex(table);
       std::vector<PatchCoord> coords(total);
       for (size_t i = 0; i < total; ++i) {
         const size_t f = i / per, k = i % per;
