@@ -244,9 +244,13 @@ int main(int argc, char** argv) {
     }
     const limn::Mesh m = limn::read_mesh(path);
     for (int depth : depths) {
-      std::vector<double> tl, to, fl, fo, rl, ro;
-      size_t pl = 0, po = 0;
-      double hl = 0, ho = 0;  // peak heap MB (the same every run)
+      // One side's runs: times, page faults or (--rss) resident growth, patches, peak heap MB
+      // (the same every run).
+      struct Side {
+        std::vector<double> ms, faults, rss;
+        size_t patches = 0;
+        double heap = 0;
+      } L, O;
       auto limn_once = [&](Forked& r) {
         limn::PatchOptions opt;
         opt.subdiv = limn::subdiv_options(m);
@@ -266,28 +270,26 @@ int main(int argc, char** argv) {
         r.ms = o.ms, r.patches = o.patches;
       };
       // One build of a side, here or (--rss) in a child process.
-      auto once = [&](const std::function<void(Forked&)>& build, std::vector<double>& t,
-                      std::vector<double>& f, std::vector<double>& res, size_t& patches,
-                      double& heap) {
+      auto once = [&](const std::function<void(Forked&)>& build, Side& side) {
         const double f0 = minor_faults();
         Forked r;
         if (rss) {
           r = run_forked(build);
           if (!r.ok) throw std::runtime_error("a forked build failed");
-          res.push_back(r.rss_mb);
+          side.rss.push_back(r.rss_mb);
         } else {
           build(r);
-          f.push_back(minor_faults() - f0);
+          side.faults.push_back(minor_faults() - f0);
         }
-        t.push_back(r.ms), patches = r.patches, heap = r.heap_mb;
+        side.ms.push_back(r.ms), side.patches = r.patches, side.heap = r.heap_mb;
         return r.ms;
       };
       auto run_limn = [&] {
-        once(limn_once, tl, fl, rl, pl, hl);
+        once(limn_once, L);
         if (peak) fmt::print("  peak RSS after limn: {:.2f} GB\n", peak_gb());
       };
       auto run_osd = [&] {
-        const double ms = once(osd_once, to, fo, ro, po, ho);
+        const double ms = once(osd_once, O);
         if (peak) fmt::print("  peak RSS after OpenSubdiv: {:.2f} GB\n", peak_gb());
         return ms <= 5000;  // OpenSubdiv's high-valence pathology: one run says enough
       };
@@ -301,14 +303,14 @@ int main(int argc, char** argv) {
           if (!limn_only && !run_osd()) break;
         }
       }
-      const double ml = median(tl), mo = to.empty() ? 0.0 : median(to);
       auto med = [](const std::vector<double>& v) { return v.empty() ? 0.0 : median(v); };
+      const double ml = med(L.ms), mo = med(O.ms);
       // --rss: the last two columns are each side's peak resident growth (MB), not faults.
       fmt::print(
           "{:<22} {:>5} {:>10} {:>10} {:>10.2f} {:>10.2f} {:>7.2f}x {:>8.2f} {:>8.2f} {:>8.{}f} "
           "{:>8.{}f}\n",
-          path.filename().string(), depth, pl, po, ml, mo, mo / ml, hl, ho, rss ? med(rl) : med(fl),
-          rss ? 2 : 0, rss ? med(ro) : med(fo), rss ? 2 : 0);
+          path.filename().string(), depth, L.patches, O.patches, ml, mo, mo / ml, L.heap, O.heap,
+          med(rss ? L.rss : L.faults), rss ? 2 : 0, med(rss ? O.rss : O.faults), rss ? 2 : 0);
       std::fflush(stdout);
     }
   }
