@@ -73,16 +73,21 @@ std::vector<float> cluster_colors(std::span<const uint32_t> face_cluster) {
   return out;
 }
 
-// A closed stroke around the z axis at z = height: for each of `bins` angles, the surface vertex
-// nearest that height among those in the angle's wedge (and within `band` of the height).
-std::vector<float> ring_stroke(const Mesh& m, float height, float band, int bins = 180) {
-  std::vector<std::pair<float, uint32_t>> best(size_t(bins), {band, kNone});
+// A closed stroke around the z axis at z = height: for each of `bins` angles, among the surface
+// vertices in the angle's wedge within `band` of the height, the one farthest from the axis
+// (`outer`) or nearest it. A height crosses a torus on two rings; the stroke keeps to one
+// instead of jumping between them (dabs between the rings would miss the surface).
+std::vector<float> ring_stroke(const Mesh& m, float height, float band, bool outer,
+                               int bins = 180) {
+  std::vector<std::pair<float, uint32_t>> best(size_t(bins), {INFINITY, kNone});
   for (uint32_t v = 0; v < m.vertex_count(); ++v) {
     const float* p = &m.positions[3 * size_t(v)];
-    const float d = std::abs(p[2] - height);
+    if (!(std::abs(p[2] - height) < band)) continue;
+    const float r = std::hypot(p[0], p[1]);
     const double a = std::atan2(double(p[1]), double(p[0])) + 3.14159265358979323846;
     const size_t bin = std::min(size_t(bins) - 1, size_t(a / (2 * 3.14159265358979323846) * bins));
-    if (d < best[bin].first) best[bin] = {d, v};
+    const float key = outer ? -r : r;
+    if (key < best[bin].first) best[bin] = {key, v};
   }
   std::vector<float> xyz;
   for (const auto& [d, v] : best)
@@ -193,12 +198,14 @@ void workflow(const std::filesystem::path& dir, std::string& md, nlohmann::json&
   StrokePainter painter(texture, surface);
   struct Stroke {
     float height;  // fraction of the height from the bottom
+    bool outer;    // the ring farther from the axis
     float color[4];
     float radius;  // fraction of the diagonal
   };
-  const Stroke strokes[] = {{0.95f, {0.85f, 0.15f, 0.1f, 1}, 0.035f},
-                            {0.5f, {0.1f, 0.35f, 0.85f, 1}, 0.05f},
-                            {0.08f, {0.95f, 0.7f, 0.1f, 1}, 0.03f}};
+  const Stroke strokes[] = {{0.99f, true, {0.85f, 0.15f, 0.1f, 1}, 0.035f},
+                            {0.5f, true, {0.1f, 0.35f, 0.85f, 1}, 0.05f},
+                            {0.5f, false, {0.15f, 0.65f, 0.3f, 1}, 0.03f},
+                            {0.2f, true, {0.95f, 0.7f, 0.1f, 1}, 0.03f}};
   size_t dabs = 0;
   for (const Stroke& s : strokes) {
     Brush b;
@@ -207,7 +214,7 @@ void workflow(const std::filesystem::path& dir, std::string& md, nlohmann::json&
     b.hardness = 0.6f;
     b.depth = 9;
     const float z = box.min[2] + s.height * (box.max[2] - box.min[2]);
-    const std::vector<float> xyz = ring_stroke(dense, z, 0.02f * extent);
+    const std::vector<float> xyz = ring_stroke(dense, z, 0.02f * extent, s.outer);
     if (xyz.empty()) continue;
     painter.begin(b);
     painter.stroke_world(xyz);
@@ -222,7 +229,7 @@ void workflow(const std::filesystem::path& dir, std::string& md, nlohmann::json&
   fmt::print(stderr, " {} dabs, {} texels, {:.1f} bytes per texel ({:.0f} ms)\n", dabs,
              ts.painted_samples, ts.bytes_per_painted_texel, t_paint);
   md += fmt::format(
-      "\nPaint: three scripted strokes ({} dabs) into an adaptive octree texture (no UVs), leaves "
+      "\nPaint: four scripted strokes ({} dabs) into an adaptive octree texture (no UVs), leaves "
       "down to level 9 only under the brush: {} painted texels, {} bytes ({:.1f} per painted "
       "texel), max depth {}; baked to vertex colours ([torus-painted.glb](torus-painted.glb), "
       "texture [torus.lot](torus.lot)). {:.0f} ms.\n\n",

@@ -78,13 +78,30 @@ Rgba8 premul_mean(const uint32_t* s, size_t count) {
 
 using Cache = OctreeSampler::Cache;
 
+// Whether a leaf of the brick at `level` holds (x, y, z), without reading its sample. `cell`
+// receives the level of the cell holding it that is a leaf or holds none: the brick's leaf
+// level, or the whole level + 1 cell when its mask byte is empty (the brick's own cell when the
+// mask is). A filtered lookup starts there.
+LIMN_WALK bool brick_cell(const uint32_t* pool, uint32_t word, int level, uint32_t x, uint32_t y,
+                          uint32_t z, int* cell) {
+  const uint32_t bp = word & ~kFlag;
+  const uint64_t mask = uint64_t(pool[bp]) | uint64_t(pool[bp + 1]) << 32;
+  const uint32_t c1 = octant(x, y, z, kD - 1 - level);
+  const uint32_t byte = uint32_t(mask >> (8 * c1)) & 255u;
+  *cell = byte ? level + 2 : mask ? level + 1 : level;
+  return byte >> octant(x, y, z, kD - 2 - level) & 1u;
+}
+
 LIMN_WALK bool brick_leaf(const uint32_t* pool, uint32_t word, int level, uint32_t x, uint32_t y,
                           uint32_t z, const float* n, Rgba8& out, int* leaf_level) {
   const uint32_t bp = word & ~kFlag;
   const uint64_t mask = uint64_t(pool[bp]) | uint64_t(pool[bp + 1]) << 32;
   const int m = int(octant(x, y, z, kD - 1 - level) * 8 + octant(x, y, z, kD - 2 - level));
   if (leaf_level) *leaf_level = level + 2;
-  if (!(mask >> m & 1)) return false;
+  if (!(mask >> m & 1)) {
+    if (leaf_level) brick_cell(pool, word, level, x, y, z, leaf_level);
+    return false;
+  }
   const uint64_t below = (uint64_t(1) << m) - 1;
   uint64_t dbl = 0;
   uint32_t base = bp + 3;
@@ -105,8 +122,8 @@ LIMN_WALK void remember(Cache& cache, const OctreeSampler::CacheSlot& s) {
   cache.slot[0] = s;
 }
 
-// kSample false: only the level the walk ends at (a filtered lookup's leaf level); the sample is
-// not read and the result is false.
+// kSample false: only the level the walk ends at (a filtered lookup's leaf level) and whether a
+// leaf holds the point (whatever its sides); the sample is not read.
 template <bool kSample = true>
 LIMN_WALK bool walk_nearest(const uint32_t* pool, const OctreeIndex* index, Cache& cache,
                             uint32_t x, uint32_t y, uint32_t z, const float* n, Rgba8& out,
@@ -126,7 +143,7 @@ LIMN_WALK bool walk_nearest(const uint32_t* pool, const OctreeIndex* index, Cach
     if (hit > 0) std::swap(cache.slot[0], cache.slot[hit]);
     const OctreeSampler::CacheSlot& s = cache.slot[0];
     if (s.brick) {
-      if constexpr (!kSample) return *level = s.level + 2, false;
+      if constexpr (!kSample) return brick_cell(pool, s.ptr, s.level, x, y, z, level);
       return brick_leaf(pool, s.ptr, s.level, x, y, z, n, out, level);
     }
     ptr = s.ptr, info = s.info, l = s.level;
@@ -140,7 +157,7 @@ LIMN_WALK bool walk_nearest(const uint32_t* pool, const OctreeIndex* index, Cach
     if (e.brick) {
       remember(cache, {e.level, true, e.ptr, 0, x >> (kD - e.level), y >> (kD - e.level),
                        z >> (kD - e.level)});
-      if constexpr (!kSample) return *level = e.level + 2, false;
+      if constexpr (!kSample) return brick_cell(pool, e.ptr, e.level, x, y, z, level);
       return brick_leaf(pool, e.ptr, e.level, x, y, z, n, out, level);
     }
     ptr = e.ptr, info = e.info, l = e.level;
@@ -165,13 +182,13 @@ LIMN_WALK bool walk_nearest(const uint32_t* pool, const OctreeIndex* index, Cach
       const uint32_t w = pool[after_gen + uint32_t(std::popcount(br & below))];
       remember(cache, {l + 1, true, w, 0, x >> (kD - l - 1), y >> (kD - l - 1), z >> (kD - l - 1)});
       cache.parent = {l, false, ptr, info, x >> (kD - l), y >> (kD - l), z >> (kD - l)};
-      if constexpr (!kSample) return *level = l + 3, false;
+      if constexpr (!kSample) return brick_cell(pool, w, l + 1, x, y, z, level);
       return brick_leaf(pool, w, l + 1, x, y, z, n, out, level);
     }
     // A leaf of this general node: remember the node (unless it is the cached one we began at).
     if (hit < 0 || l != start_level)
       remember(cache, {l, false, ptr, info, x >> (kD - l), y >> (kD - l), z >> (kD - l)});
-    if constexpr (!kSample) return false;
+    if constexpr (!kSample) return true;
     const uint32_t lf = octree::leaves(info), dbl = octree::doubles(info);
     const uint32_t base = after_gen + uint32_t(std::popcount(br)) + 1;
     const uint32_t r = uint32_t(std::popcount(lf & below));
@@ -230,14 +247,15 @@ LIMN_WALK uint32_t brick_taps(const uint32_t* pool, uint32_t word, const uint32_
 }
 
 // The 8 leaf-level taps of a filtered lookup, accumulated premultiplied (acc: rgb, alpha,
-// weight). The taps are resolved first, then accumulated in corner order with the float
-// operations of one tap at a time, so the sums do not depend on how a tap was found. Taps
-// sharing a brick (at most 8 blocks of them, one when the 2x2x2 block does not cross a brick
-// boundary) are read from it together once the cache holds it; the others are nearest walks
-// sharing the cache.
+// weight). `deepest` rises to the level of a finer leaf whose sample a tap read, `reach` to the
+// deepest level any tap's walk ended at (a leaf or an empty cell). The taps are resolved first,
+// then accumulated in corner order with the float operations of one tap at a time, so the sums do
+// not depend on how a tap was found. Taps sharing a brick (at most 8 blocks of them, one when the
+// 2x2x2 block does not cross a brick boundary) are read from it together once the cache holds it;
+// the others are nearest walks sharing the cache.
 LIMN_WALK bool walk_trilinear(const uint32_t* pool, const OctreeIndex* index, Cache& cache,
                               const double u[3], int level, const float* n, float acc[5],
-                              int& deepest) {
+                              int& deepest, int& reach) {
   const double cells = double(1u << level);
   int64_t i0[3];
   double wt[3][2];
@@ -266,6 +284,7 @@ LIMN_WALK bool walk_trilinear(const uint32_t* pool, const OctreeIndex* index, Ca
       found |= 1u << corner;
       deepest = std::max(deepest, ended);  // a finer leaf's sample (bricks' are at `level`)
     }
+    reach = std::max(reach, ended);
     return ended;
   };
   if (level < 2) {
@@ -356,14 +375,14 @@ __attribute__((target("popcnt"))) bool walk_trilinear_popcnt(const uint32_t* poo
                                                              const OctreeIndex* index, Cache& cache,
                                                              const double u[3], int level,
                                                              const float* n, float acc[5],
-                                                             int& deepest) {
-  return walk_trilinear(pool, index, cache, u, level, n, acc, deepest);
+                                                             int& deepest, int& reach) {
+  return walk_trilinear(pool, index, cache, u, level, n, acc, deepest, reach);
 }
 
 bool walk_trilinear_generic(const uint32_t* pool, const OctreeIndex* index, Cache& cache,
                             const double u[3], int level, const float* n, float acc[5],
-                            int& deepest) {
-  return walk_trilinear(pool, index, cache, u, level, n, acc, deepest);
+                            int& deepest, int& reach) {
+  return walk_trilinear(pool, index, cache, u, level, n, acc, deepest, reach);
 }
 
 // A filtered lookup at p's leaf level: finds the level (a walk that reads no sample, leaving p's
@@ -373,28 +392,39 @@ LIMN_WALK int walk_filtered(const uint32_t* pool, const OctreeIndex* index, Cach
                             const uint32_t c[3], const double u[3], const float* n, float footprint,
                             double size, int& leaf_level, float acc[5]) {
   // p's brick is usually one the last lookup's taps read: then its leaves are p's level.
+  bool at_leaf;
   const int b = cache.brick_level;
   const OctreeSampler::BrickSlot& bs =
       cache.brick[(c[0] >> (kD - b) & 3) | (c[1] >> (kD - b) & 3) << 2 |
                   (c[2] >> (kD - b) & 3) << 4];
   if (b >= 0 && bs.level == b && bs.x == c[0] >> (kD - b) && bs.y == c[1] >> (kD - b) &&
       bs.z == c[2] >> (kD - b)) {
-    leaf_level = b + 2;
+    at_leaf = brick_cell(pool, bs.ptr, b, c[0], c[1], c[2], &leaf_level);
   } else {
     Rgba8 unused;
-    walk_nearest<false>(pool, index, cache, c[0], c[1], c[2], n, unused, &leaf_level);
+    at_leaf = walk_nearest<false>(pool, index, cache, c[0], c[1], c[2], n, unused, &leaf_level);
   }
   // Where a tap reads the sample of a finer leaf, p sits in a coarse leaf beside finer ones
   // (the texture is deep only where it was painted): the taps of p's level would reach a whole
   // coarse cell away and read points of that detail. Filter at the finer level instead, until
   // no tap finds a finer leaf: the filter stays local and continuous into the finer leaves.
+  // p in a cell no leaf holds (a drawn surface a little off the painted one, in a cell the paint
+  // never touched): while a tap's cell holds finer leaves, one level finer, so the filter reads
+  // the leaves beside p rather than coarse cell centres that miss them (or coarse leaves a whole
+  // cell away). It stops where every tap's walk ends in a leaf or empty cell no finer than the
+  // taps; those cells hold every finer level's taps, so nothing finer lies within reach.
   for (;;) {
     const double leaf_size = size / double(1u << leaf_level);
     if (footprint > leaf_size && std::isfinite(footprint)) return -1;
-    int deepest = leaf_level;
-    const bool any = walk_trilinear(pool, index, cache, u, leaf_level, n, acc, deepest);
-    if (deepest <= leaf_level) return any;
-    leaf_level = deepest;
+    int deepest = leaf_level, reach = leaf_level;
+    const bool any = walk_trilinear(pool, index, cache, u, leaf_level, n, acc, deepest, reach);
+    if (deepest > leaf_level) {
+      leaf_level = deepest;
+    } else if (!at_leaf && reach > leaf_level && leaf_level < kD) {
+      ++leaf_level;
+    } else {
+      return any;
+    }
     std::fill(acc, acc + 5, 0.0f);
   }
 }
@@ -575,9 +605,9 @@ bool OctreeSampler::trilinear(const double u[3], int level, const float* n, bool
                               float acc[5]) {
   const uint32_t* pool = t_->words().data();
   if (!averages) {
-    int deepest = level;
-    return kPopcnt ? walk_trilinear_popcnt(pool, index_, cache_, u, level, n, acc, deepest)
-                   : walk_trilinear_generic(pool, index_, cache_, u, level, n, acc, deepest);
+    int deepest = level, reach = level;
+    return kPopcnt ? walk_trilinear_popcnt(pool, index_, cache_, u, level, n, acc, deepest, reach)
+                   : walk_trilinear_generic(pool, index_, cache_, u, level, n, acc, deepest, reach);
   }
   // Mip levels (node averages): not the hot path.
   const double cells = double(1u << level);

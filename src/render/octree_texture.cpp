@@ -47,12 +47,20 @@ vec4 oct_unpack(uint c) {
               float(c >> 24)) / 255.0;
 }
 
-bool oct_brick_leaf(uint word, int level, uvec3 c, vec3 n, out uint col) {
+// ended: the level of the leaf, or of the coarsest cell holding no leaf (the brick's level + 1
+// cell when its mask byte is empty).
+bool oct_brick_leaf(uint word, int level, uvec3 c, vec3 n, out uint col, out int ended) {
   col = oct_background;
   uint bp = word & ~kFlag;
   uvec2 mask = uvec2(pool[bp], pool[bp + 1u]);
   int m = int(oct_octant(c, kD - 1 - level) * 8u + oct_octant(c, kD - 2 - level));
-  if (!oct_bit64(mask, m)) return false;
+  ended = level + 2;
+  if (!oct_bit64(mask, m)) {
+    int c1 = m >> 3;
+    uint byte = c1 < 4 ? (mask.x >> (8 * c1)) & 255u : (mask.y >> (8 * (c1 - 4))) & 255u;
+    if (byte == 0u) ended = (mask.x | mask.y) != 0u ? level + 1 : level;
+    return false;
+  }
   uvec2 dbl = uvec2(0u);
   uint base = bp + 3u;
   if ((word & kFlag) != 0u) {
@@ -104,8 +112,7 @@ bool oct_nearest_at(uvec3 c, vec3 n, out uint col, out int level) {
     uint after_gen = ptr + 2u * uint(bitCount(gen));
     if ((br & bit) != 0u) {
       uint w = pool[after_gen + uint(bitCount(br & below))];
-      level = l + 3;
-      return oct_brick_leaf(w, l + 1, c, n, col);
+      return oct_brick_leaf(w, l + 1, c, n, col, level);
     }
     return oct_general_leaf(after_gen + uint(bitCount(br)) + 1u, info, bit, n, col);
   }
@@ -193,7 +200,8 @@ bool oct_cell_value(uvec3 c, int level, vec3 n, out uint col) {
         col = oct_premul_mean(cells, k);
         return true;
       }
-      return oct_brick_leaf(w, l + 1, c, n, col);
+      int ended;
+      return oct_brick_leaf(w, l + 1, c, n, col, ended);
     }
     return oct_general_leaf(after_gen + uint(bitCount(br)) + 1u, info, bit, n, col);
   }
@@ -201,9 +209,10 @@ bool oct_cell_value(uvec3 c, int level, vec3 n, out uint col) {
 }
 
 // The 8 taps around u at `level`: acc = premultiplied rgb, alpha; weight in acc_w.
-// deepest: rises to the level of a finer leaf whose sample a tap read (leaf taps only).
+// deepest: rises to the level of a finer leaf whose sample a tap read, reach: to the deepest
+// level a tap's walk ended at (leaf taps only).
 bool oct_trilinear(dvec3 u, int level, vec3 n, bool averages, inout vec4 acc, inout float acc_w,
-                   inout int deepest) {
+                   inout int deepest, inout int reach) {
   double cells = double(1u << level);
   dvec3 g = u * cells - 0.5;
   dvec3 f = floor(g);
@@ -226,7 +235,9 @@ bool oct_trilinear(dvec3 u, int level, vec3 n, bool averages, inout vec4 acc, in
     uvec3 x = (uvec3(ic) << uint(shift)) + half_cell;
     uint c;
     int lv;
+    lv = level;
     bool found = averages ? oct_cell_value(x, level, n, c) : oct_nearest_at(x, n, c, lv);
+    reach = max(reach, lv);
     if (!found) continue;
     if (!averages) deepest = max(deepest, lv);
     float a = float(c >> 24) / 255.0, fw = float(w);
@@ -267,11 +278,13 @@ bool oct_filtered(vec3 p, vec3 n, float footprint, out vec4 rgba) {
   if (!oct_cell(p, c, u)) return false;
   uint col;
   int leaf_level;
-  oct_nearest_at(c, n, col, leaf_level);
+  // Whatever its sides (a zero normal reads the front sample every leaf has).
+  bool at_leaf = oct_nearest_at(c, vec3(0.0), col, leaf_level);
   vec4 acc = vec4(0.0);
   float acc_w = 0.0;
   bool hit;
-  // OctreeSampler::filtered: a tap reading a finer leaf's sample moves the filter to that level.
+  // OctreeSampler::filtered: a tap reading a finer leaf's sample moves the filter to that level;
+  // p where no leaf is (off the painted surface): one finer while a tap's cell holds finer leaves.
   bool mip = false;
   for (;;) {
     double leaf_size = double(oct_size) / double(1u << leaf_level);
@@ -281,21 +294,25 @@ bool oct_filtered(vec3 p, vec3 n, float footprint, out vec4 rgba) {
     }
     acc = vec4(0.0);
     acc_w = 0.0;
-    int deepest = leaf_level;
-    hit = oct_trilinear(u, leaf_level, n, false, acc, acc_w, deepest);
-    if (deepest <= leaf_level) break;
-    leaf_level = deepest;
+    int deepest = leaf_level, reach = leaf_level;
+    hit = oct_trilinear(u, leaf_level, n, false, acc, acc_w, deepest, reach);
+    if (deepest > leaf_level)
+      leaf_level = deepest;
+    else if (!at_leaf && reach > leaf_level && leaf_level < kD)
+      ++leaf_level;
+    else
+      break;
   }
   if (mip) {
-    int unused = 0;
+    int unused = 0, unused_reach = 0;
     float lf = clamp(log2(oct_size / footprint), 0.0, float(leaf_level));
     int l0 = int(floor(lf));
     float frac = lf - float(l0);
     vec4 a0 = vec4(0.0), a1 = vec4(0.0);
     float w0s = 0.0, w1s = 0.0;
-    bool h0 = oct_trilinear(u, l0, n, true, a0, w0s, unused);
+    bool h0 = oct_trilinear(u, l0, n, true, a0, w0s, unused, unused_reach);
     bool h1 = frac > 0.0 && l0 + 1 <= leaf_level &&
-              oct_trilinear(u, l0 + 1, n, l0 + 1 < leaf_level, a1, w1s, unused);
+              oct_trilinear(u, l0 + 1, n, l0 + 1 < leaf_level, a1, w1s, unused, unused_reach);
     hit = h0 || h1;
     vec4 v0 = w0s > 0.0 ? a0 / w0s : vec4(0.0), v1 = w1s > 0.0 ? a1 / w1s : vec4(0.0);
     float w0 = h0 ? 1.0 - frac : 0.0, w1 = h1 ? frac : 0.0;

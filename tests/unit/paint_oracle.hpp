@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <map>
+#include <set>
 #include <tuple>
 #include <vector>
 
@@ -209,6 +210,8 @@ struct CellMap {
     Rgba8 s[2] = {0, 0};
   };
   std::map<std::tuple<int, uint32_t, uint32_t, uint32_t>, Cell> cells;
+  /// Every cell holding a finer leaf (a leaf's ancestors, the root's cell at level 0 included).
+  std::set<std::tuple<int, uint32_t, uint32_t, uint32_t>> above;
   const OctreeTexture* t = nullptr;
 
   explicit CellMap(const OctreeTexture& tex) : t(&tex) {
@@ -217,7 +220,15 @@ struct CellMap {
       c.tag = s.tag;
       c.s[s.side] = s.color;
       if (s.side == 1) c.dbl = true;
+      for (int l = 0; l < s.level; ++l)
+        above.insert({l, s.x >> (s.level - l), s.y >> (s.level - l), s.z >> (s.level - l)});
     });
+  }
+  /// The level of the cell holding (x, y, z) (level 16) that is a leaf or holds no leaf at all.
+  int cell_level(uint32_t x, uint32_t y, uint32_t z) const {
+    int l = 0;
+    while (l < 16 && above.count({l, x >> (16 - l), y >> (16 - l), z >> (16 - l)})) ++l;
+    return l;
   }
   /// The leaf holding integer point (x, y, z) at level 16, by trying every level: nullptr when
   /// none. `level` receives the leaf's level.
@@ -251,8 +262,9 @@ struct CellMap {
   }
   /// Reference trilinear lookup: the 8 cells around p at a level, each read as a nearest lookup
   /// at its centre, premultiplied, weights renormalised over the cells with a sample facing n.
-  /// The level starts at the leaf holding p's and goes down to the deepest leaf whose sample a
-  /// tap read, until no tap reads a deeper one. False when no leaf holds p or no tap has a sample.
+  /// The level starts at the cell holding p that is a leaf or holds none and goes down to the
+  /// deepest leaf whose sample a tap read, until no tap reads a deeper one; when no leaf holds p,
+  /// also one level finer while a tap's cell holds finer leaves. False when no tap has a sample.
   bool filtered(const float p[3], const float* n, float out[4]) const {
     uint32_t xyz[3];
     double u[3];
@@ -263,12 +275,21 @@ struct CellMap {
       u[k] = v / 65536.0;
     }
     int level = 0;
-    if (!leaf(xyz[0], xyz[1], xyz[2], &level)) return false;
+    const bool at_leaf = leaf(xyz[0], xyz[1], xyz[2], &level) != nullptr;
+    if (!at_leaf) level = cell_level(xyz[0], xyz[1], xyz[2]);
     double acc[5] = {0, 0, 0, 0, 0};
-    for (int deepest = level;; level = deepest) {
+    for (;;) {
       std::fill(acc, acc + 5, 0.0);
-      taps(u, level, n, acc, deepest);
-      if (deepest <= level) break;
+      int deepest = level;
+      bool finer = false;
+      taps(u, level, n, acc, deepest, &finer);
+      if (deepest > level) {
+        level = deepest;
+      } else if (!at_leaf && finer && level < 16) {
+        ++level;
+      } else {
+        break;
+      }
     }
     if (!(acc[4] > 0)) return false;
     for (int k = 0; k < 3; ++k) out[k] = acc[3] > 0 ? float(acc[k] / acc[3]) : 0.0f;
@@ -276,8 +297,9 @@ struct CellMap {
     return true;
   }
   /// The 8 taps of `filtered` at `level`; `deepest` rises to the level of any deeper leaf whose
-  /// sample a tap read.
-  void taps(const double u[3], int level, const float* n, double acc[5], int& deepest) const {
+  /// sample a tap read; `finer` (may be null) is set when a tap's cell holds finer leaves.
+  void taps(const double u[3], int level, const float* n, double acc[5], int& deepest,
+            bool* finer = nullptr) const {
     const double n_cells = double(1u << level);
     for (int corner = 0; corner < 8; ++corner) {
       double w = 1;
@@ -294,8 +316,10 @@ struct CellMap {
       const int sh = 16 - level;
       const uint32_t half = sh ? 1u << (sh - 1) : 0;
       int at = 0;
-      const Cell* c = leaf((uint32_t(ic[0]) << sh) + half, (uint32_t(ic[1]) << sh) + half,
-                           (uint32_t(ic[2]) << sh) + half, &at);
+      const uint32_t x = (uint32_t(ic[0]) << sh) + half, y = (uint32_t(ic[1]) << sh) + half,
+                     z = (uint32_t(ic[2]) << sh) + half;
+      if (finer && above.count({level, x >> sh, y >> sh, z >> sh})) *finer = true;
+      const Cell* c = leaf(x, y, z, &at);
       if (!c) continue;
       const int side = side_of(c->tag, n);
       if (side && !c->dbl) continue;

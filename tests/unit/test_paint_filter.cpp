@@ -2,6 +2,7 @@
 // point on the surface can sit in a coarse leaf right beside fine painted ones. The filter must
 // stay local there (the taps of a coarse level reach a whole coarse cell away, and a fine tap's
 // sample is a point of the painted detail, not the cell's colour), and the GPU must do the same.
+// A point a little off the painted surface, in a cell no paint reached, finds the paint beside it.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -96,6 +97,65 @@ TEST(PaintFilter, ContinuousFromCoarseLeavesIntoFineOnes) {
       prev_level = level;
     }
     EXPECT_GE(levels_seen, 2) << "the ray should cross from fine leaves into coarse ones";
+  }
+}
+
+// A drawn surface lies a little off the one painted (a limit surface against its tessellation),
+// and can cross into a cell the paint never touched, empty up to a coarse level. The filter there
+// must go down to the painted leaves beside it, not read the coarse level's cell centres (which
+// miss the sheet and gave the background: specks in painted bands). The sheet lies 0.3 leaf above
+// the cube's middle plane, so points a fraction of a leaf below it are in the cube's empty lower
+// half (an empty level-1 cell); two leaves and more away the filter still finds nothing.
+TEST(PaintFilter, PointsJustOffThePaintKeepItsColour) {
+  const float origin[3] = {-2, -2, -2};
+  const float leaf = 4.0f / 512.0f;
+  const float z0 = 0.3f * leaf;
+  const Mesh m = test::sheet(-1, 1, -1, 1, z0, 8, true);
+  const PaintSurface surface(m);
+  OctreeTexture t = OctreeTexture::empty(origin, 4.0f, pack_rgba8(255, 255, 255, 255));
+  {
+    Brush b;
+    b.depth = 9, b.radius = 0.2f, b.hardness = 1;
+    b.color[0] = 1, b.color[1] = 0, b.color[2] = 0, b.color[3] = 1;
+    StrokePainter p(t, surface);
+    p.begin(b);
+    const float at[3] = {0, 0, z0};
+    p.dab_world(at);
+    p.end();
+  }
+  OctreeSampler s(t);
+  const float up[3] = {0, 0, 1};
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u01(0, 1);
+  std::vector<float> pts, nrm;
+  std::vector<uint8_t> want;
+  size_t empty_cells = 0;
+  for (int i = 0; i < 3000; ++i) {
+    const float a = 2 * float(M_PI) * u01(rng), r = (0.2f - 3 * leaf) * std::sqrt(u01(rng));
+    const bool near = i % 4 != 0;
+    // Near: 0.75 leaf below to 0.95 above the sheet (below, within half a leaf of the painted
+    // cells' centres, where trilinear taps reach them); far: 2.5 to 4 leaves below it.
+    const float dz = near ? (1.7f * u01(rng) - 0.75f) * leaf : -(2.5f + 1.5f * u01(rng)) * leaf;
+    const float p[3] = {r * std::cos(a), r * std::sin(a), z0 + dz};
+    Rgba8 c;
+    int level = 0;
+    if (!s.nearest(p, up, c, &level)) empty_cells += near && level < 9;
+    float rgba[4];
+    ASSERT_EQ(s.filtered(p, up, 0.0f, rgba), near) << "dz " << dz / leaf << " leaf";
+    for (int k = 0; k < 4 && near; ++k)
+      ASSERT_NEAR(rgba[k], k == 0 || k == 3 ? 1.0f : 0.0f, 1e-6) << k;
+    pts.insert(pts.end(), p, p + 3);
+    nrm.insert(nrm.end(), up, up + 3);
+    want.push_back(near);
+  }
+  EXPECT_GT(empty_cells, 300u) << "points below the sheet should lie in coarse empty cells";
+  GlContext ctx;
+  const GpuOctreeTexture gpu(t);
+  const GpuOctreeTexture::Lookups l = gpu.lookup(pts, nrm, 0.0f);
+  for (size_t i = 0; i < want.size(); ++i) {
+    ASSERT_EQ(bool(l.filtered_found[i]), bool(want[i])) << i;
+    for (int k = 0; k < 4 && want[i]; ++k)
+      ASSERT_NEAR(l.filtered[4 * i + k], k == 0 || k == 3 ? 1.0f : 0.0f, 2e-3) << i;
   }
 }
 

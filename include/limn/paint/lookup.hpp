@@ -46,7 +46,8 @@ class OctreeSampler {
   /// Nearest: the colour of the leaf holding p, the sample facing n (n null: the front sample;
   /// n need not be unit). False, with `out` = background, when p is outside the cube, no leaf
   /// holds it or the leaf has no sample facing n. `level` (may be null) receives the level of
-  /// the leaf or of the empty cell the walk ended in. O(depth), O(1) when cached.
+  /// the leaf or of the empty cell the walk ended in (the coarsest one holding no leaf).
+  /// O(depth), O(1) when cached.
   bool nearest(const float p[3], const float* n, Rgba8& out, int* level = nullptr);
 
   /// Filtered: trilinear over the 8 cells around p at the level of p's leaf, each tap a nearest
@@ -55,10 +56,13 @@ class OctreeSampler {
   /// level rises to that leaf's until no tap finds a finer one, so the filter never reaches a
   /// coarse cell away into painted detail), with the weights renormalised over taps that have a
   /// sample facing n:
-  /// samples of a sheet facing the other way never leak in. `footprint` (world units, 0: none):
-  /// when wider than the leaf, the mip levels the footprint spans (node averages) are blended
-  /// trilinearly instead; averages ignore sides. Out: straight RGBA in [0,1]. False (rgba = 0)
-  /// when no tap has a sample. O(8 depth), ~O(8) cached.
+  /// samples of a sheet facing the other way never leak in. p where no leaf is (a drawn surface
+  /// a little off the painted one) starts at the coarsest cell holding p that holds no leaf and
+  /// goes one level finer while a tap's cell holds finer leaves, so it reads the paint within
+  /// about a leaf of p rather than coarse cell centres that miss it. `footprint` (world units, 0:
+  /// none): when wider than the leaf, the mip levels the footprint spans (node averages) are
+  /// blended trilinearly instead; averages ignore sides. Out: straight RGBA in [0,1]. False (rgba =
+  /// 0) when no tap has a sample. O(8 depth), ~O(8) cached.
   bool filtered(const float p[3], const float* n, float footprint, float rgba[4]);
 
   /// Forgets the cache.
