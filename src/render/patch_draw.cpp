@@ -275,12 +275,22 @@ std::string with_header(int cvs, const char* a, const char* b = "", const char* 
 
 // What line_rates keeps between draws: per cage face a ball holding every point its patches are
 // made from (the vertices of the faces around its corners, each within half that face's
-// perimeter of the corner; subdivision only averages them), view-independent, and scratch.
+// perimeter of the corner; subdivision only averages them), view-independent; blocks of faces
+// near each other with a ball holding theirs, so a view tests blocks before faces; and what the
+// last view set, so the next one clears only that and uploads only the range that changed.
 struct RateScratch {
-  std::vector<float> ball;         // per cage face: centre x, y, z, radius
-  std::vector<uint8_t> seen;       // per cage edge: beside a face that may be in view
-  std::vector<uint8_t> face_seen;  // per cage face: may be in view
+  std::vector<float> ball;          // per cage face: centre x, y, z, radius
+  std::vector<uint32_t> order;      // the faces by block (Morton order of their centres)
+  std::vector<float> block_ball;    // per block of kBlock faces in `order`: centre, radius
+  std::vector<uint8_t> face_seen;   // per cage face: may be in view
+  std::vector<uint32_t> seen_list;  // the faces that may be in view
+  std::vector<uint32_t> edge_stamp, vertex_stamp;  // == stamp: rated / projected this view
+  std::vector<double> vertex_xy;                   // projected vertices (x, y; NaN: behind)
+  std::vector<uint32_t> set;  // entries of the rates the last view made nonzero
+  uint32_t stamp = 0;
+  size_t dirty_lo = 0, dirty_hi = 0;  // the rates' entries changed by the last call
 };
+constexpr size_t kBlock = 64;
 
 void face_balls(const Mesh& cage, RateScratch& scratch) {
   const size_t nf = cage.face_count();
@@ -314,44 +324,122 @@ void face_balls(const Mesh& cage, RateScratch& scratch) {
     }
     centre[3] = float(1.01 * radius + 1e-6);
   }
+  // Blocks: the faces in the Morton order of their centres (10 bits per axis over the cage's
+  // box), kBlock at a time, each block's ball holding its faces' balls.
+  const Box box = bounding_box(cage);
+  std::vector<std::pair<uint32_t, uint32_t>> code(nf);
+  for (size_t f = 0; f < nf; ++f) {
+    uint32_t m = 0;
+    for (int k = 0; k < 3; ++k) {
+      const float ext = box.max[k] - box.min[k];
+      const float t = ext > 0 ? (scratch.ball[4 * f + size_t(k)] - box.min[k]) / ext : 0.0f;
+      const uint32_t q = uint32_t(std::clamp(t, 0.0f, 1.0f) * 1023.0f);
+      for (int bit = 0; bit < 10; ++bit) m |= (q >> bit & 1u) << (3 * bit + k);
+    }
+    code[f] = {m, uint32_t(f)};
+  }
+  std::sort(code.begin(), code.end());
+  scratch.order.resize(nf);
+  for (size_t i = 0; i < nf; ++i) scratch.order[i] = code[i].second;
+  const size_t nb = (nf + kBlock - 1) / kBlock;
+  scratch.block_ball.assign(4 * nb, 0.0f);
+  for (size_t b = 0; b < nb; ++b) {
+    const size_t first = b * kBlock, last = std::min(nf, first + kBlock);
+    double c[3] = {0, 0, 0};
+    for (size_t i = first; i < last; ++i)
+      for (int k = 0; k < 3; ++k) c[k] += scratch.ball[4 * size_t(scratch.order[i]) + size_t(k)];
+    for (double& x : c) x /= double(last - first);
+    double r = 0;
+    for (size_t i = first; i < last; ++i) {
+      const float* fb = &scratch.ball[4 * size_t(scratch.order[i])];
+      r = std::max(r, std::sqrt((fb[0] - c[0]) * (fb[0] - c[0]) + (fb[1] - c[1]) * (fb[1] - c[1]) +
+                                (fb[2] - c[2]) * (fb[2] - c[2])) +
+                          double(fb[3]));
+    }
+    float* bb = &scratch.block_ball[4 * b];
+    for (int k = 0; k < 3; ++k) bb[k] = float(c[k]);
+    bb[3] = float(1.001 * r + 1e-6);
+  }
+  scratch.face_seen.assign(nf, 0);
+  scratch.seen_list.clear();
+  scratch.edge_stamp.clear(), scratch.vertex_stamp.clear();
 }
 
 // The level-0 rate of every cage line for this view: segments per cage edge (its projected
 // length over `pixels_per_segment`), then per cage face the largest of its edges'. Lines that
 // only border faces wholly out of view (their balls outside the view) get 1 segment: every patch
 // of a face that may be seen keeps its rates, and rates stay per line, so shared edges still
-// agree.
+// agree. The work follows what is in view (blocks of faces out of view are one test), not the
+// cage: `out` keeps its zeros between views, and scratch.dirty_lo / dirty_hi say which entries
+// this call changed.
 void line_rates(const Mesh& cage, const Topology& topo, const Camera& camera, float pps,
                 std::vector<float>& out, RateScratch& scratch) {
-  const size_t ne = topo.edge_count(), nf = cage.face_count();
-  out.assign(ne + nf, 0.0f);
-  for (size_t e = 0; e < ne; ++e) {
-    const float* a = &cage.positions[3 * size_t(topo.edge_vertices[2 * e])];
-    const float* b = &cage.positions[3 * size_t(topo.edge_vertices[2 * e + 1])];
-    double ax, ay, bx, by;
-    if (!camera.project(a, ax, ay) || !camera.project(b, bx, by)) {
-      out[e] = 1e6f;  // reaches behind the eye: as fine as it goes
-      continue;
-    }
-    out[e] = float(std::hypot(ax - bx, ay - by) / double(pps));
-  }
+  const size_t ne = topo.edge_count(), nf = cage.face_count(), nv = cage.vertex_count();
   if (scratch.ball.size() != 4 * nf) face_balls(cage, scratch);
-  std::vector<uint8_t>& seen = scratch.seen;
-  seen.assign(ne, 0);
-  scratch.face_seen.assign(nf, 0);
-  for (size_t f = 0; f < nf; ++f) {
-    const float* ball = &scratch.ball[4 * f];
-    if (camera.ball_outside(ball, ball[3])) continue;  // out[ne + f] stays 0
-    scratch.face_seen[f] = 1;
+  size_t lo = SIZE_MAX, hi = 0;
+  if (out.size() != ne + nf) {
+    out.assign(ne + nf, 0.0f);
+    scratch.set.clear();
+    lo = 0, hi = ne + nf;
+  }
+  for (const uint32_t i : scratch.set)
+    out[i] = 0.0f, lo = std::min<size_t>(lo, i), hi = std::max<size_t>(hi, i + 1);
+  scratch.set.clear();
+  for (const uint32_t f : scratch.seen_list) scratch.face_seen[f] = 0;
+  scratch.seen_list.clear();
+  if (scratch.edge_stamp.size() != ne) scratch.edge_stamp.assign(ne, 0);
+  if (scratch.vertex_stamp.size() != nv)
+    scratch.vertex_stamp.assign(nv, 0), scratch.vertex_xy.assign(2 * nv, 0.0);
+  if (++scratch.stamp == 0) {  // wrapped: no entry may look current
+    std::fill(scratch.edge_stamp.begin(), scratch.edge_stamp.end(), 0u);
+    std::fill(scratch.vertex_stamp.begin(), scratch.vertex_stamp.end(), 0u);
+    scratch.stamp = 1;
+  }
+  const uint32_t stamp = scratch.stamp;
+  const CameraView view(camera);
+  // The faces that may be in view, block by block.
+  const size_t nb = scratch.block_ball.size() / 4;
+  for (size_t b = 0; b < nb; ++b) {
+    const float* bb = &scratch.block_ball[4 * b];
+    if (view.ball_outside(bb, bb[3])) continue;
+    for (size_t i = b * kBlock, last = std::min(nf, i + kBlock); i < last; ++i) {
+      const uint32_t f = scratch.order[i];
+      const float* ball = &scratch.ball[4 * size_t(f)];
+      if (view.ball_outside(ball, ball[3])) continue;
+      scratch.face_seen[f] = 1;
+      scratch.seen_list.push_back(f);
+    }
+  }
+  auto project = [&](uint32_t v) {
+    double* xy = &scratch.vertex_xy[2 * size_t(v)];
+    if (scratch.vertex_stamp[v] != stamp) {
+      scratch.vertex_stamp[v] = stamp;
+      if (!view.project(&cage.positions[3 * size_t(v)], xy[0], xy[1])) xy[0] = xy[1] = NAN;
+    }
+    return xy;
+  };
+  for (const uint32_t f : scratch.seen_list) {
     float m = 0;
     for (uint32_t c = cage.face_offsets[f]; c < cage.face_offsets[f + 1]; ++c) {
-      m = std::max(m, out[topo.corner_edge[c]]);
-      seen[topo.corner_edge[c]] = 1;
+      const uint32_t e = topo.corner_edge[c];
+      if (scratch.edge_stamp[e] != stamp) {
+        scratch.edge_stamp[e] = stamp;
+        const double* a = project(topo.edge_vertices[2 * size_t(e)]);
+        const double* b = project(topo.edge_vertices[2 * size_t(e) + 1]);
+        // Reaching behind the eye: as fine as it goes.
+        out[e] = std::isnan(a[0]) || std::isnan(b[0])
+                     ? 1e6f
+                     : float(std::hypot(a[0] - b[0], a[1] - b[1]) / double(pps));
+        scratch.set.push_back(e);
+        lo = std::min<size_t>(lo, e), hi = std::max<size_t>(hi, e + 1);
+      }
+      m = std::max(m, out[e]);
     }
     out[ne + f] = m;
+    scratch.set.push_back(uint32_t(ne + f));
+    lo = std::min<size_t>(lo, ne + f), hi = std::max<size_t>(hi, ne + f + 1);
   }
-  for (size_t e = 0; e < ne; ++e)
-    if (!seen[e]) out[e] = 0;
+  scratch.dirty_lo = lo == SIZE_MAX ? 0 : lo, scratch.dirty_hi = lo == SIZE_MAX ? 0 : hi;
 }
 
 // The tessellation stages alone, their position, (s, t) and patch captured by transform
@@ -409,6 +497,18 @@ struct PatchDrawer::Impl {
   size_t chunk = SIZE_MAX;
 
   const std::array<gl::Program, 2>& programs_for(const DrawOptions& o);
+  // The rates of this view, uploaded where they changed.
+  void update_rates(const Camera& camera, float pixels_per_segment) {
+    line_rates(*cage, topo, camera, pixels_per_segment, rates, rate_scratch);
+    const size_t bytes = rates.size() * sizeof(float);
+    if (!lines.get() || bytes > lines_cap) {
+      gl::upload(lines, lines_cap, rates.data(), bytes);
+    } else if (rate_scratch.dirty_hi > rate_scratch.dirty_lo) {
+      const size_t lo = rate_scratch.dirty_lo, n = rate_scratch.dirty_hi - lo;
+      glNamedBufferSubData(lines.get(), GLintptr(lo * sizeof(float)), GLsizeiptr(n * sizeof(float)),
+                           rates.data() + lo);
+    }
+  }
 };
 
 const std::array<gl::Program, 2>& PatchDrawer::Impl::programs_for(const DrawOptions& o) {
@@ -537,8 +637,7 @@ DrawStats PatchDrawer::draw(const Camera& camera, const DrawOptions& o) {
   if (o.factor < 0 || o.factor > 32)
     throw InputError(fmt::format("render: tessellation factor {} out of range (1-32)", o.factor));
   if (!(o.pixels_per_segment > 0)) throw InputError("render: pixels per segment must be positive");
-  line_rates(*m.cage, m.topo, camera, o.pixels_per_segment, m.rates, m.rate_scratch);
-  gl::upload(m.lines, m.lines_cap, m.rates.data(), m.rates.size() * sizeof(float));
+  m.update_rates(camera, o.pixels_per_segment);
   const std::array<float, 16> vp = gl::view_projection(camera, m.bounds);
   float ramp[17 * 3];
   for (int k = 0; k < 17; ++k) depth_color(k, ramp + 3 * k);
@@ -599,8 +698,7 @@ DrawStats PatchDrawer::draw(const Camera& camera, const DrawOptions& o) {
 
 PatchDrawer::Capture PatchDrawer::capture(const Camera& camera, const DrawOptions& o) {
   Impl& m = *impl_;
-  line_rates(*m.cage, m.topo, camera, o.pixels_per_segment, m.rates, m.rate_scratch);
-  gl::upload(m.lines, m.lines_cap, m.rates.data(), m.rates.size() * sizeof(float));
+  m.update_rates(camera, o.pixels_per_segment);
   const std::array<float, 16> vp = gl::view_projection(camera, m.bounds);
   Capture out;
   // Nothing is drawn, but a draw needs a complete framebuffer (a surfaceless context has none).

@@ -91,38 +91,28 @@ bool view_frame(const Camera& c, const ViewAxis& a, double r[3], double u[3]) {
 
 }  // namespace
 
+CameraView::CameraView(const Camera& c) {
+  const ViewAxis a = view_axis(c);
+  for (int k = 0; k < 3; ++k) eye_[k] = c.eye[k], f_[k] = a.f[k];
+  distance_ = a.distance, f_px_ = a.f_px;
+  half_w_ = 0.5 * c.width, half_h_ = 0.5 * c.height;
+  framed_ = view_frame(c, a, r_, u_);
+  // Side planes through the eye: x = +-z w / (2 f_px), y = +-z h / (2 f_px), and the factors
+  // that turn a point's offset from them into a distance.
+  hx_ = 0.5 * c.width / a.f_px, hy_ = 0.5 * c.height / a.f_px;
+  nx_ = 1.0 / std::sqrt(1.0 + hx_ * hx_), ny_ = 1.0 / std::sqrt(1.0 + hy_ * hy_);
+}
+
 double Camera::scale_at(const float p[3], double radius) const {
-  const ViewAxis a = view_axis(*this);
-  if (!(a.distance > 0)) return 0.0;
-  const double d[3] = {double(p[0]) - eye[0], double(p[1]) - eye[1], double(p[2]) - eye[2]};
-  const double z = std::max(dot3(d, a.f) - radius, 1e-6 * a.distance);
-  return a.f_px / z;
+  return CameraView(*this).scale_at(p, radius);
 }
 
 bool Camera::project(const float p[3], double& x, double& y) const {
-  const ViewAxis a = view_axis(*this);
-  double r[3], u[3];
-  if (!view_frame(*this, a, r, u)) return false;
-  const double d[3] = {double(p[0]) - eye[0], double(p[1]) - eye[1], double(p[2]) - eye[2]};
-  const double z = dot3(d, a.f);
-  if (z <= 0) return false;
-  x = 0.5 * width + a.f_px * dot3(d, r) / z;
-  y = 0.5 * height - a.f_px * dot3(d, u) / z;
-  return true;
+  return CameraView(*this).project(p, x, y);
 }
 
 bool Camera::ball_outside(const float p[3], double radius) const {
-  const ViewAxis a = view_axis(*this);
-  double r[3], u[3];
-  if (!(a.distance > 0) || !view_frame(*this, a, r, u)) return false;
-  const double d[3] = {double(p[0]) - eye[0], double(p[1]) - eye[1], double(p[2]) - eye[2]};
-  const double z = dot3(d, a.f), x = dot3(d, r), y = dot3(d, u);
-  if (z + radius <= 0) return true;
-  // Side planes through the eye: x = +-z w / (2 f_px), y = +-z h / (2 f_px); their distance
-  // from the ball's centre against the radius.
-  const double hx = 0.5 * width / a.f_px, hy = 0.5 * height / a.f_px;
-  const double nx = 1.0 / std::sqrt(1.0 + hx * hx), ny = 1.0 / std::sqrt(1.0 + hy * hy);
-  return (std::abs(x) - hx * z) * nx > radius || (std::abs(y) - hy * z) * ny > radius;
+  return CameraView(*this).ball_outside(p, radius);
 }
 
 Camera frame_camera(const Mesh& mesh, int width, int height) {
@@ -367,7 +357,7 @@ double measured_error(const VertexErrorModel& m, size_t v, int d, double& reach)
 
 // The shallowest depth whose measured error projects within the tolerance, with hysteresis
 // against `previous`: the continuous need interpolates the error between levels.
-int measured_depth(const Mesh& cage, const VertexErrorModel& m, const Camera& camera,
+int measured_depth(const Mesh& cage, const VertexErrorModel& m, const CameraView& camera,
                    const DepthOptions& o, size_t v, std::span<const uint8_t> previous) {
   const float* p = &cage.positions[3 * v];
   // Every end cap v's depth governs lies within its reach at some level (the margin covers
@@ -418,13 +408,14 @@ std::vector<uint8_t> select_depths(const Mesh& cage, const VertexErrorModel& mod
   if (o.min_depth < 0 || o.max_depth > 12 || o.min_depth > o.max_depth)
     throw InputError(
         fmt::format("select depths: depth range {}-{} (0-12)", o.min_depth, o.max_depth));
+  const CameraView view(camera);  // the frame once, not per vertex
   std::vector<uint8_t> d(nv, uint8_t(o.min_depth));
   if (estimate_px) estimate_px->assign(nv, 0.0f);
   for (size_t v = 0; v < nv; ++v) {
     if (!overrides.empty() && overrides[v] != 255) {
       d[v] = std::min<uint8_t>(overrides[v], 12);
     } else if (model.levels > 0) {
-      const int depth = measured_depth(cage, model, camera, o, v, previous);
+      const int depth = measured_depth(cage, model, view, o, v, previous);
       d[v] = uint8_t(std::clamp(depth, o.min_depth, o.max_depth));
     } else if (model.k[v] > 0) {
       // The error left at depth d lies in the end caps, within radius * r^d of v (the ring
@@ -433,7 +424,7 @@ std::vector<uint8_t> select_depths(const Mesh& cage, const VertexErrorModel& mod
       const double r = double(model.mu[v]), k = double(model.k[v]);
       auto need_at = [&](int depth) {
         const double reach = model.radius[v] * std::pow(r, std::max(depth, 0));
-        const double s = camera.scale_at(&cage.positions[3 * v], reach);
+        const double s = view.scale_at(&cage.positions[3 * v], reach);
         return std::log(k * s / o.tolerance_px) / std::log(1.0 / r);
       };
       int depth = 0;
@@ -444,10 +435,10 @@ std::vector<uint8_t> select_depths(const Mesh& cage, const VertexErrorModel& mod
     if (estimate_px && model.levels > 0) {
       double reach;
       const double e = measured_error(model, v, d[v], reach);
-      (*estimate_px)[v] = float(e * camera.scale_at(&cage.positions[3 * v], reach));
+      (*estimate_px)[v] = float(e * view.scale_at(&cage.positions[3 * v], reach));
     } else if (estimate_px && model.k[v] > 0) {
       const double reach = model.radius[v] * std::pow(double(model.mu[v]), d[v]);
-      (*estimate_px)[v] = float(model.k[v] * camera.scale_at(&cage.positions[3 * v], reach) *
+      (*estimate_px)[v] = float(model.k[v] * view.scale_at(&cage.positions[3 * v], reach) *
                                 std::pow(double(model.mu[v]), d[v]));
     }
   }

@@ -244,6 +244,42 @@ TEST(Render, PatchesOutOfViewAreCoarse) {
   EXPECT_LE(double(differ), 0.01 * double(covered));
 }
 
+// The rates a view sets are cleared by the next one (only what changed is recomputed and
+// uploaded): a drawer that has drawn other views tessellates each view exactly as a fresh one.
+TEST(Render, RatesFollowTheView) {
+  context();
+  const Case c = make_case("shape:terrain-small", 2, false);
+  const Camera whole = frame_camera(c.cage, 320, 240);
+  const float shift = 0.3f * bounding_box(c.cage).diagonal();
+  std::vector<Camera> views;
+  for (const float dx : {-shift, shift, 0.0f}) {
+    Camera cam = whole;
+    for (int k = 0; k < 3; ++k) cam.eye[k] = cam.target[k] + 0.15f * (cam.eye[k] - cam.target[k]);
+    cam.eye[0] += dx, cam.target[0] += dx;
+    views.push_back(cam);
+  }
+  views.push_back(whole);
+  views.push_back(views[0]);
+  PatchDrawer reused(c.cage, c.table, c.points);
+  std::vector<size_t> counts;
+  for (const Camera& cam : views) {
+    const PatchDrawer::Capture got = reused.capture(cam, DrawOptions{});
+    PatchDrawer fresh(c.cage, c.table, c.points);
+    const PatchDrawer::Capture want = fresh.capture(cam, DrawOptions{});
+    ASSERT_EQ(got.coords.size(), want.coords.size());
+    ASSERT_EQ(got.positions, want.positions);
+    for (size_t i = 0; i < got.coords.size(); ++i) {
+      ASSERT_EQ(got.coords[i].patch, want.coords[i].patch) << i;
+      ASSERT_EQ(got.coords[i].s, want.coords[i].s) << i;
+      ASSERT_EQ(got.coords[i].t, want.coords[i].t) << i;
+    }
+    counts.push_back(got.coords.size());
+  }
+  // The views differ: close-ups of two sides and the whole terrain tessellate differently.
+  EXPECT_NE(counts[0], counts[1]);
+  EXPECT_NE(counts[0], counts[3]);
+}
+
 // The drawing options are compiled into programs of their own (one per combination, made at its
 // first use): each option shows in the picture as it should, options drawn in any order give the
 // same pixels, and switching back gives the first picture again.

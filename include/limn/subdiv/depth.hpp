@@ -13,6 +13,8 @@
 // (bench/calibrate_depth.cpp prints it).
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -38,6 +40,48 @@ struct Camera {
   /// The ball of `radius` around p lies wholly outside the view (beyond a side of the image or
   /// behind the eye), so nothing in it can be seen. Conservative: false when unsure.
   bool ball_outside(const float p[3], double radius) const;
+};
+
+/// A camera's projection set up once for many points (the view axis and frame, the focal length
+/// in pixels): the same results as Camera::project, ball_outside and scale_at, which build one
+/// per call. O(1) per point.
+class CameraView {
+ public:
+  explicit CameraView(const Camera& c);
+  /// Camera::project.
+  bool project(const float p[3], double& x, double& y) const {
+    if (!framed_) return false;
+    const double d[3] = {double(p[0]) - eye_[0], double(p[1]) - eye_[1], double(p[2]) - eye_[2]};
+    const double z = dot(d, f_);
+    if (z <= 0) return false;
+    x = half_w_ + f_px_ * dot(d, r_) / z;
+    y = half_h_ - f_px_ * dot(d, u_) / z;
+    return true;
+  }
+  /// Camera::ball_outside.
+  bool ball_outside(const float p[3], double radius) const {
+    if (!(distance_ > 0) || !framed_) return false;
+    const double d[3] = {double(p[0]) - eye_[0], double(p[1]) - eye_[1], double(p[2]) - eye_[2]};
+    const double z = dot(d, f_), x = dot(d, r_), y = dot(d, u_);
+    if (z + radius <= 0) return true;
+    return (std::abs(x) - hx_ * z) * nx_ > radius || (std::abs(y) - hy_ * z) * ny_ > radius;
+  }
+  /// Camera::scale_at.
+  double scale_at(const float p[3], double radius = 0) const {
+    if (!(distance_ > 0)) return 0.0;
+    const double d[3] = {double(p[0]) - eye_[0], double(p[1]) - eye_[1], double(p[2]) - eye_[2]};
+    const double z = std::max(dot(d, f_) - radius, 1e-6 * distance_);
+    return f_px_ / z;
+  }
+
+ private:
+  static double dot(const double* a, const double* b) {
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+  }
+  double eye_[3], f_[3] = {}, r_[3] = {}, u_[3] = {};
+  double distance_ = 0, f_px_ = 0, half_w_ = 0, half_h_ = 0;
+  double hx_ = 0, hy_ = 0, nx_ = 0, ny_ = 0;
+  bool framed_ = false;  // the up vector is not along the view axis
 };
 
 /// A camera looking at the bounding box's centre from +z (slightly raised), framing the whole
