@@ -30,7 +30,8 @@ void delete_query(GLuint n) {
 }
 
 Program program(std::string_view name,
-                std::initializer_list<std::pair<GLenum, std::string_view>> stages) {
+                std::initializer_list<std::pair<GLenum, std::string_view>> stages,
+                std::initializer_list<const char*> feedback) {
   Program p(glCreateProgram());
   std::vector<GLuint> shaders;
   for (const auto& [type, source] : stages) {
@@ -53,6 +54,9 @@ Program program(std::string_view name,
     glAttachShader(p.get(), s);
     shaders.push_back(s);
   }
+  if (feedback.size())
+    glTransformFeedbackVaryings(p.get(), GLsizei(feedback.size()), feedback.begin(),
+                                GL_INTERLEAVED_ATTRIBS);
   glLinkProgram(p.get());
   for (GLuint s : shaders) glDeleteShader(s);
   GLint ok = 0;

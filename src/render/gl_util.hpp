@@ -49,9 +49,11 @@ using Renderbuffer = Name<delete_renderbuffer>;
 using Query = Name<delete_query>;
 
 /// Compiles and links the stages (type, GLSL source); throws std::runtime_error with `name` and
-/// the driver's log.
+/// the driver's log. `feedback` (may be empty): outputs captured by transform feedback,
+/// interleaved in that order.
 Program program(std::string_view name,
-                std::initializer_list<std::pair<GLenum, std::string_view>> stages);
+                std::initializer_list<std::pair<GLenum, std::string_view>> stages,
+                std::initializer_list<const char*> feedback = {});
 
 /// A buffer holding `bytes` (GL_STATIC_DRAW unless `dynamic`).
 Buffer buffer(const void* data, size_t bytes, bool dynamic = false);

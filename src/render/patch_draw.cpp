@@ -442,30 +442,6 @@ void line_rates(const Mesh& cage, const Topology& topo, const Camera& camera, fl
   scratch.dirty_lo = lo == SIZE_MAX ? 0 : lo, scratch.dirty_hi = lo == SIZE_MAX ? 0 : hi;
 }
 
-// The tessellation stages alone, their position, (s, t) and patch captured by transform
-// feedback (interleaved: 3 + 2 floats, then the patch as a float-bit uint).
-gl::Program capture_program(std::string_view name, const std::string& vs, const std::string& tc,
-                            const std::string& te) {
-  gl::Program p(glCreateProgram());
-  for (const auto& [type, source] :
-       {std::pair{GLenum(GL_VERTEX_SHADER), &vs}, std::pair{GLenum(GL_TESS_CONTROL_SHADER), &tc},
-        std::pair{GLenum(GL_TESS_EVALUATION_SHADER), &te}}) {
-    const GLuint sh = glCreateShader(type);
-    const char* text = source->c_str();
-    glShaderSource(sh, 1, &text, nullptr);
-    glCompileShader(sh);
-    glAttachShader(p.get(), sh);
-    glDeleteShader(sh);
-  }
-  const char* varyings[] = {"t_pos", "t_uv", "t_patch"};
-  glTransformFeedbackVaryings(p.get(), 3, varyings, GL_INTERLEAVED_ATTRIBS);
-  glLinkProgram(p.get());
-  GLint ok = 0;
-  glGetProgramiv(p.get(), GL_LINK_STATUS, &ok);
-  if (!ok) throw std::runtime_error(fmt::format("OpenGL: program {} does not link", name));
-  return p;
-}
-
 }  // namespace
 
 // Patches per run that draw() leaves out when all their faces are out of view.
@@ -542,8 +518,19 @@ PatchDrawer::PatchDrawer(const Mesh& cage, const PatchTable& table, std::span<co
   m.te16 = with_header(16, kInfo, kEvalCommon, kEvalRegular);
   m.te20 = with_header(20, kInfo, kEvalCommon, kEvalGregory);
   m.programs_for(DrawOptions{});  // the default programs, so that shader errors show here
-  m.regular_capture = capture_program("regular patches (capture)", m.vs16, m.tc16, m.te16);
-  m.gregory_capture = capture_program("end caps (capture)", m.vs20, m.tc20, m.te20);
+  // The tessellation stages alone, their position, (s, t) and patch captured by transform
+  // feedback (interleaved: 3 + 2 floats, then the patch as a float-bit uint).
+  const auto varyings = {"t_pos", "t_uv", "t_patch"};
+  m.regular_capture = gl::program("regular patches (capture)",
+                                  {{GL_VERTEX_SHADER, m.vs16},
+                                   {GL_TESS_CONTROL_SHADER, m.tc16},
+                                   {GL_TESS_EVALUATION_SHADER, m.te16}},
+                                  varyings);
+  m.gregory_capture = gl::program("end caps (capture)",
+                                  {{GL_VERTEX_SHADER, m.vs20},
+                                   {GL_TESS_CONTROL_SHADER, m.tc20},
+                                   {GL_TESS_EVALUATION_SHADER, m.te20}},
+                                  varyings);
   GLuint n = 0;
   glCreateVertexArrays(1, &n);
   m.vao = gl::VertexArray(n);
