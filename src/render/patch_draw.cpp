@@ -444,8 +444,8 @@ void line_rates(const Mesh& cage, const Topology& topo, const Camera& camera, fl
 
 }  // namespace
 
-// Patches per run that draw() leaves out when all their faces are out of view.
-constexpr size_t kCullRun = 32;
+// Patches of faces out of view that draw() draws rather than split a run of patches in view.
+constexpr size_t kCullGap = 8;
 
 struct PatchDrawer::Impl {
   const Mesh* cage = nullptr;
@@ -652,8 +652,9 @@ DrawStats PatchDrawer::draw(const Camera& camera, const DrawOptions& o) {
     glUniform3fv(glGetUniformLocation(prog, "ramp"), 17, ramp);
     if (o.texture) o.texture->bind(prog, o.texture_nearest ? 1 : 2);
     glPatchParameteri(GL_PATCH_VERTICES, cvs);
-    // Runs of kCullRun patches whose faces are all out of view are left out; the rest is drawn
-    // in runs of at most m.chunk patches.
+    // Patches whose faces are all out of view are left out: the runs of patches of faces that
+    // may be seen (gaps of up to kCullGap patches drawn through) are drawn in draws of at most
+    // m.chunk patches.
     const uint32_t* face = m.patch_face.data() + (pass ? m.regular : 0);
     const std::vector<uint8_t>& seen = m.rate_scratch.face_seen;
     size_t begin = 0, end = 0;  // the run of patches to draw, not yet drawn
@@ -662,13 +663,10 @@ DrawStats PatchDrawer::draw(const Camera& camera, const DrawOptions& o) {
         glDrawArrays(GL_PATCHES, GLint(first * size_t(cvs)),
                      GLsizei(std::min(m.chunk, end - first) * size_t(cvs)));
     };
-    for (size_t first = 0; first < count; first += kCullRun) {
-      const size_t last = std::min(first + kCullRun, count);
-      bool any = false;
-      for (size_t p = first; p < last && !any; ++p) any = seen[face[p]] != 0;
-      if (!any) continue;
-      if (first != end) flush(), begin = first;
-      end = last;
+    for (size_t p = 0; p < count; ++p) {
+      if (!seen[face[p]]) continue;
+      if (end == 0 || p > end + kCullGap) flush(), begin = p;
+      end = p + 1;
     }
     flush();
   }
