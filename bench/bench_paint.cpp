@@ -22,10 +22,13 @@
 // probeValue taps blended with the same renormalised premultiplied weights, no sides). Medians
 // of 3.
 // Dab time at depth 10: strokes of dabs radius 4, 8, 16, 32 leaves at random surface points,
-// first pass (refining from the start tree) and a second pass over the same dabs.
+// first pass (refining from the start tree) and a second pass over the same dabs, each dab a
+// stroke of its own (a click); then dabs in strokes of 12-13 dabs (a drag) at radius 16 and 32,
+// with the stroke's reuse across dabs on and off (StrokePainter::set_reuse).
 //   limn_bench_paint [--models DIR] [--depths 6,7,8,9,10,11] [--points N] [--quick]
-//                    [--only table|lookups|dabs] [--dump FILE] [--cpu-clock] [--reps N]
-// --only: one part (lookups still build limn full and the VDB grid at depth 10, unprinted);
+//                    [--only table|lookups|dabs|strokes] [--dump FILE] [--cpu-clock] [--reps N]
+// --only: one part (dabs: both dab tables; strokes: the second alone; lookups still build limn full
+// and the VDB grid at depth 10, unprinted);
 // --dump: writes a hash of every lookup result and of every dab configuration's painted samples
 // (after each pass), to check that a change leaves results bit for bit as they were;
 // --cpu-clock: lookup and dab times in thread CPU time instead of wall time (for a busy
@@ -345,7 +348,8 @@ int main(int argc, char** argv) {
                                           "tri/armadillo-100k.obj"};
   const bool do_table = a.only.empty() || a.only == "table",
              do_lookups = a.only.empty() || a.only == "lookups",
-             do_dabs = a.only.empty() || a.only == "dabs";
+             do_dabs = a.only.empty() || a.only == "dabs",
+             do_strokes = do_dabs || a.only == "strokes";
   FILE* dump = a.dump.empty() ? nullptr : std::fopen(a.dump.c_str(), "w");
 
   if (do_table) fmt::print("## Table 1: memory and build time by depth (single thread)\n\n");
@@ -617,6 +621,82 @@ int main(int argc, char** argv) {
                  fs::path(name).stem().string(), leaves, at.size(), median(first), mean,
                  median(second), double(changed) / double(at.size()),
                  double(rays) / double(at.size()));
+      std::fflush(stdout);
+    }
+  }
+  // Dabs in strokes: radius 16 and 32 leaves, dabs at the brush's default spacing along paths on
+  // the surface (a surface point, then steps along the surface in a tangent direction), each path
+  // one stroke, painted with reuse across dabs on and off (the same texture, bit for bit).
+  if (do_strokes)
+    fmt::print(
+        "\n## Dabs in strokes at depth 10 (single thread; spacing 0.25 radius; ms per dab)\n\n"
+        "| model | radius | strokes | dabs | first pass, reuse | repaint, reuse | first pass, no "
+        "reuse | repaint, no reuse |\n|---|---:|---:|---:|---:|---:|---:|---:|\n");
+  for (const std::string& name : do_strokes ? names : std::vector<std::string>{}) {
+    const Mesh mesh = read_mesh(a.models / name);
+    const PaintSurface surf(mesh);
+    const std::vector<Sample> at = surface_points(surf, a.quick ? 8 : 20, 7);
+    for (int leaves : {16, 32}) {
+      double ms[2][2] = {};  // [reuse off, on][pass]
+      size_t dabs = 0;
+      for (int reuse = 1; reuse >= 0; --reuse) {
+        OctreeTexture t = OctreeTexture::create(surf);
+        Brush b;
+        b.depth = 10, b.radius = t.size() * float(leaves) / 1024.0f, b.hardness = 0.5f;
+        // Paths 3 radii long in steps of an eighth of the spacing.
+        std::vector<std::vector<float>> paths;
+        for (const Sample& x : at) {
+          paint_detail::V3 p = paint_detail::v3(x.p), n = paint_detail::v3(x.n);
+          paint_detail::V3 d = paint_detail::cross(
+              n, std::fabs(n.x) < 0.9f ? paint_detail::V3{1, 0, 0} : paint_detail::V3{0, 1, 0});
+          d = (1 / paint_detail::length(d)) * d;
+          std::vector<float> xyz = {p.x, p.y, p.z};
+          const float step = b.spacing * b.radius / 8;
+          for (int i = 0; i < 96; ++i) {
+            const paint_detail::V3 g = p + step * d;
+            const float gq[3] = {g.x, g.y, g.z};
+            SurfaceHit hit;
+            if (!surf.closest_point(gq, b.radius, hit)) break;
+            const paint_detail::V3 np = paint_detail::v3(hit.p);
+            n = paint_detail::v3(hit.n);
+            d = np - p;
+            d = d - paint_detail::dot(d, n) * n;
+            const float l = paint_detail::length(d);
+            if (!(l > 0)) break;
+            d = (1 / l) * d, p = np;
+            xyz.insert(xyz.end(), {p.x, p.y, p.z});
+          }
+          paths.push_back(std::move(xyz));
+        }
+        size_t changed = 0;
+        for (int pass = 0; pass < 2; ++pass) {
+          b.color[0] = pass ? 0.2f : 0.9f;
+          double total = 0;
+          dabs = 0;
+          for (const std::vector<float>& xyz : paths) {
+            StrokePainter p(t, surf);
+            p.set_reuse(reuse != 0);
+            p.begin(b);
+            const double t0 = clock_ms();
+            p.stroke_world(xyz);
+            total += clock_ms() - t0;
+            const StrokeStats st = p.end();
+            dabs += st.dabs, changed += st.samples_changed;
+          }
+          ms[reuse][pass] = total / double(std::max<size_t>(dabs, 1));
+          if (dump) {
+            Hash words;
+            for (uint32_t w : t.words()) words.add(w);
+            fmt::print(dump,
+                       "strokes {} {} reuse {} pass {} samples {:016x} pool {:016x} changed {}\n",
+                       fs::path(name).stem().string(), leaves, reuse, pass, sample_hash(t), words.h,
+                       changed);
+          }
+        }
+      }
+      fmt::print("| {} | {} | {} | {} | {:.3f} | {:.3f} | {:.3f} | {:.3f} |\n",
+                 fs::path(name).stem().string(), leaves, at.size(), dabs, ms[1][0], ms[1][1],
+                 ms[0][0], ms[0][1]);
       std::fflush(stdout);
     }
   }

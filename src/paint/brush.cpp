@@ -71,47 +71,96 @@ template <class V>
 class FlatMap {
  public:
   const V* find(uint64_t key) const {
-    if (keys_.empty()) return nullptr;
-    for (size_t i = slot(key);; i = (i + 1) & (keys_.size() - 1)) {
-      if (keys_[i] == key) return &vals_[i];
-      if (keys_[i] == kEmpty) return nullptr;
+    if (slots_.empty()) return nullptr;
+    for (size_t i = slot(key);; i = (i + 1) & (slots_.size() - 1)) {
+      if (slots_[i].key == key) return &slots_[i].val;
+      if (slots_[i].key == kEmpty) return nullptr;
     }
   }
   // Room for n keys without growing.
   void reserve(size_t n) {
-    if (2 * n > keys_.size()) grow(std::bit_ceil(2 * n));
+    if (2 * n > slots_.size()) grow(std::bit_ceil(2 * n));
   }
   V& find_or_add(uint64_t key, const V& init) {
-    if (2 * (count_ + 1) > keys_.size()) grow(std::max<size_t>(1024, 2 * keys_.size()));
+    if (2 * (count_ + 1) > slots_.size()) grow(std::max<size_t>(1024, 2 * slots_.size()));
     size_t i = slot(key);
-    for (;; i = (i + 1) & (keys_.size() - 1)) {
-      if (keys_[i] == key) return vals_[i];
-      if (keys_[i] == kEmpty) break;
+    for (;; i = (i + 1) & (slots_.size() - 1)) {
+      if (slots_[i].key == key) return slots_[i].val;
+      if (slots_[i].key == kEmpty) break;
     }
-    keys_[i] = key, vals_[i] = init, ++count_;
-    return vals_[i];
+    slots_[i] = {key, init}, ++count_;
+    return slots_[i].val;
   }
 
  private:
   static constexpr uint64_t kEmpty = ~uint64_t(0);
+  // Key and value side by side: one cache line read per probe.
+  struct Slot {
+    uint64_t key;
+    V val;
+  };
   size_t slot(uint64_t key) const {
-    return size_t((key * 0x9e3779b97f4a7c15ull) >> 32) & (keys_.size() - 1);
+    return size_t((key * 0x9e3779b97f4a7c15ull) >> 32) & (slots_.size() - 1);
   }
   void grow(size_t size) {
-    std::vector<uint64_t> keys = std::move(keys_);
-    std::vector<V> vals = std::move(vals_);
-    keys_.assign(size, kEmpty);
-    vals_.resize(keys_.size());
-    for (size_t j = 0; j < keys.size(); ++j) {
-      if (keys[j] == kEmpty) continue;
-      size_t i = slot(keys[j]);
-      while (keys_[i] != kEmpty) i = (i + 1) & (keys_.size() - 1);
-      keys_[i] = keys[j], vals_[i] = vals[j];
+    std::vector<Slot> old = std::move(slots_);
+    slots_.assign(size, Slot{kEmpty, V{}});
+    for (const Slot& x : old) {
+      if (x.key == kEmpty) continue;
+      size_t i = slot(x.key);
+      while (slots_[i].key != kEmpty) i = (i + 1) & (slots_.size() - 1);
+      slots_[i] = x;
     }
   }
-  std::vector<uint64_t> keys_;
-  std::vector<V> vals_;
+  std::vector<Slot> slots_;
   size_t count_ = 0;
+};
+
+// The same interface for the texels of a stroke, in blocks of the 64 keys that differ only in
+// their low 6 bits (the Morton code's last two levels: a brick's leaves, one side): one hash
+// lookup per block, none while the lookups stay in the last block, and a brick's texels side by
+// side in memory.
+template <class V>
+class BlockMap {
+ public:
+  const V* find(uint64_t key) const {
+    const uint32_t b = block(key >> 6);
+    if (b == kNone || !(blocks_[b].present >> (key & 63) & 1)) return nullptr;
+    return &blocks_[b].v[key & 63];
+  }
+  // Room for about n keys.
+  void reserve(size_t n) { index_.reserve(n / 16 + 16); }
+  V& find_or_add(uint64_t key, const V& init) {
+    uint32_t b = block(key >> 6);
+    if (b == kNone) {
+      b = uint32_t(blocks_.size());
+      blocks_.emplace_back();
+      index_.find_or_add(key >> 6, b);
+      last_group_ = key >> 6, last_ = b;
+    }
+    Block& bl = blocks_[b];
+    const uint64_t bit = uint64_t(1) << (key & 63);
+    if (!(bl.present & bit)) bl.present |= bit, bl.v[key & 63] = init;
+    return bl.v[key & 63];
+  }
+
+ private:
+  static constexpr uint32_t kNone = ~0u;
+  struct Block {
+    uint64_t present = 0;
+    V v[64];
+  };
+  uint32_t block(uint64_t group) const {
+    if (group == last_group_) return last_;
+    const uint32_t* b = index_.find(group);
+    if (!b) return kNone;
+    last_group_ = group, last_ = *b;
+    return *b;
+  }
+  FlatMap<uint32_t> index_;
+  std::vector<Block> blocks_;
+  mutable uint64_t last_group_ = ~uint64_t(0);
+  mutable uint32_t last_ = kNone;
 };
 
 }  // namespace
@@ -151,7 +200,7 @@ struct StrokePainter::State : LeafPainter {
     Rgba8 orig;
     float w;
   };
-  FlatMap<Texel> texels;
+  BlockMap<Texel> texels;
   float cos_falloff = 0;  // cos(brush.falloff_angle_deg)
   // The current dab.
   V3 c, n0;
@@ -231,7 +280,20 @@ struct StrokePainter::State : LeafPainter {
     npending = 0;
   }
 
-  void paint(const CellBox& box, LeafCell& cell, std::span<const uint32_t> cell_tris) override {
+  // With reuse on, per memo (a brick's leaf, see LeafPainter::paint): the cell's tag and per
+  // side the nearest surface point to the cell's centre and its normal, which depend on nothing
+  // else once the refiner gives the cell a memo.
+  struct Near {
+    uint8_t known = 0, tag = 0, has = 0;  // has: bit side, a triangle on that side
+    V3 q[2], nq[2];
+  };
+  bool reuse = false;
+  std::vector<Near> nears;
+
+  // The nearest point to the cell's centre on the cell's triangles of each side.
+  void nearest(const CellBox& box, const LeafCell& cell, std::span<const uint32_t> cell_tris,
+               Near& e) const {
+    e.has = 0;
     for (int side = 0; side < 2; ++side) {
       float best = INFINITY;
       V3 q, nq;
@@ -245,13 +307,34 @@ struct StrokePainter::State : LeafPainter {
         if (d2 < best) best = d2, q = p, nq = v3(n);
       }
       if (best == INFINITY) continue;
+      e.has = uint8_t(e.has | 1 << side), e.q[side] = q, e.nq[side] = nq;
+    }
+  }
+
+  void paint(const CellBox& box, LeafCell& cell, std::span<const uint32_t> cell_tris,
+             uint32_t memo) override {
+    Near local;
+    const Near* e = &local;
+    if (reuse && memo != kNoMemo) {
+      if (memo >= nears.size()) nears.resize(std::max<size_t>(size_t(memo) + 1, 2 * nears.size()));
+      Near& kept = nears[memo];
+      if (!kept.known || kept.tag != cell.tag) {
+        nearest(box, cell, cell_tris, kept);
+        kept.known = 1, kept.tag = cell.tag;
+      }
+      e = &kept;
+    } else {
+      nearest(box, cell, cell_tris, local);
+    }
+    const uint64_t cell_key = morton3(box.x, box.y, box.z) | uint64_t(box.level) << 48;
+    for (int side = 0; side < 2; ++side) {
+      if (!(e->has >> side & 1)) continue;
       if (side == 1 && !cell.dbl) cell.dbl = true, cell.s[1] = tex.background();
       V3 o, dir;
       float len;
-      const float w = weight(q, nq, box.h, o, dir, len);
+      const float w = weight(e->q[side], e->nq[side], box.h, o, dir, len);
       if (!(w > 0)) continue;
-      const uint64_t key =
-          morton3(box.x, box.y, box.z) | uint64_t(box.level) << 48 | uint64_t(side) << 53;
+      const uint64_t key = cell_key | uint64_t(side) << 53;
       // A texel this stroke already gave as much changes whatever the ray finds: no ray.
       if (const Texel* tx = texels.find(key); tx && w <= tx->w) continue;
       if (npending == kBatch) flush();
@@ -277,6 +360,8 @@ struct StrokePainter::State : LeafPainter {
     surf.triangles_near(cc, list_r, tris);
     Region reg;
     reg.everything = false, reg.c = c, reg.r = region_r;
+    // From the stroke's second dab on (a single dab, a click, would only pay for the keeping).
+    refiner.keep_brick_lists(reuse && stats.dabs > 0);
     refiner.run(reg, tris, depth, this);
     ++stats.dabs;
   }
@@ -302,6 +387,7 @@ void StrokePainter::begin(const Brush& brush, const PaintCamera* camera) {
   st_->brush = brush;
   st_->cos_falloff = std::cos(brush.falloff_angle_deg * 3.14159265f / 180.0f);
   st_->has_camera = camera != nullptr;
+  st_->reuse = reuse_;
   if (camera) st_->camera = *camera;
   st_->t0 = std::chrono::steady_clock::now();
   if (history_) history_->begin(t_);
@@ -454,7 +540,7 @@ struct FillPainter : LeafPainter {
   BlendMode mode;
   float opacity;
   size_t changed = 0;
-  void paint(const CellBox&, LeafCell& cell, std::span<const uint32_t>) override {
+  void paint(const CellBox&, LeafCell& cell, std::span<const uint32_t>, uint32_t) override {
     for (int side = 0; side < (cell.dbl ? 2 : 1); ++side) {
       const Rgba8 nc = blend(cell.s[side], color, mode, opacity);
       if (nc != cell.s[side]) cell.s[side] = nc, ++changed;

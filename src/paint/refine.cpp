@@ -15,18 +15,9 @@ Refiner::Refiner(OctreeTexture& t, const PaintSurface& s) : ed_(t), s_(s) {
   // Boxes grow by 2^-22 of the cube: a triangle lying on a cell face belongs to both cells, so a
   // point on the surface always lands in a cell that holds it.
   slack_ = t.size() * float(1.0 / double(1u << 22));
-}
-
-CellBox Refiner::box(int level, uint32_t x, uint32_t y, uint32_t z) const {
-  CellBox b;
-  b.level = level, b.x = x, b.y = y, b.z = z;
-  const OctreeTexture& t = ed_.texture();
-  const double s = double(t.size()) / double(1u << level);
-  b.c = {float(double(t.origin()[0]) + (double(x) + 0.5) * s),
-         float(double(t.origin()[1]) + (double(y) + 0.5) * s),
-         float(double(t.origin()[2]) + (double(z) + 0.5) * s)};
-  b.h = float(0.5 * s);
-  return b;
+  for (int l = 0; l <= octree::kMaxDepth; ++l)
+    scale_[size_t(l)] = double(t.size()) / double(1u << l);
+  for (int k = 0; k < 3; ++k) origin_[k] = double(t.origin()[k]);
 }
 
 bool Refiner::meets(const CellBox& b) const {
@@ -267,7 +258,8 @@ bool Refiner::build_brick(const CellBox& cb, const LeafCell& leaf, std::span<con
       const std::vector<uint32_t>& t2 = same ? f2 : sub_;
       const CellBox& b2 = k2[c2];
       if (t2.empty() || !meets(b2)) continue;
-      if (painter_) painter_->paint(b2, b.cell[8 * c1 + c2], t2), ++stats.leaves_painted;
+      if (painter_)
+        painter_->paint(b2, b.cell[8 * c1 + c2], t2, LeafPainter::kNoMemo), ++stats.leaves_painted;
     }
   }
   ++stats.bricks_created;  // counted as before, even when no sub-cell meets the surface
@@ -320,30 +312,64 @@ bool Refiner::try_compact(const GeneralNode& n, Brick& out) const {
 void Refiner::visit_brick(Brick& b, const CellBox& bb, std::span<const uint32_t> tris) {
   Split &p1 = brick1_, &p2 = brick2_;
   // Only children meeting the region are visited: only they are split.
-  CellBox k1[8], k2[8];
+  CellBox k1[8], k2[8][8];
   children(bb, k1);
   const uint32_t want1 = meeting(k1);
-  split(tris, bb, k1, p1, want1);
-  for (int c1 = 0; c1 < 8; ++c1) {
-    const CellBox& b1 = k1[c1];
-    if (p1[size_t(c1)].empty() || !(want1 >> c1 & 1)) continue;
-    children(b1, k2);
-    const uint32_t want2 = meeting(k2);
-    split(p1[size_t(c1)], b1, k2, p2, want2);
-    for (int c2 = 0; c2 < 8; ++c2) {
-      const CellBox& b2 = k2[c2];
-      const std::vector<uint32_t>& t2 = p2[size_t(c2)];
-      if (t2.empty() || !(want2 >> c2 & 1)) continue;
-      const int m = 8 * c1 + c2;
-      if (!(b.mask >> m & 1)) {
-        // A surface cell the brick lacks: the texture was made for another mesh.
-        b.mask |= uint64_t(1) << m;
-        b.cell[m] = make_leaf(t2, nullptr);
-        ++stats.leaves_created;
+  uint32_t want2[8] = {};
+  for (int c1 = 0; c1 < 8; ++c1)
+    if (want1 >> c1 & 1) children(k1[c1], k2[c1]), want2[c1] = meeting(k2[c1]);
+  KeptBrick* kept = nullptr;
+  uint32_t memo0 = LeafPainter::kNoMemo;  // memo of leaf m: memo0 + m
+  auto visit_leaf = [&](int c1, int c2, std::span<const uint32_t> t2) {
+    const int m = 8 * c1 + c2;
+    if (!(b.mask >> m & 1)) {
+      // A surface cell the brick lacks: the texture was made for another mesh.
+      b.mask |= uint64_t(1) << m;
+      b.cell[m] = make_leaf(t2, nullptr);
+      ++stats.leaves_created;
+    }
+    const uint32_t memo = memo0 == LeafPainter::kNoMemo ? memo0 : memo0 + uint32_t(m);
+    if (painter_) painter_->paint(k2[c1][c2], b.cell[m], t2, memo), ++stats.leaves_painted;
+  };
+  uint64_t want = 0;
+  if (keep_) {
+    for (int c1 = 0; c1 < 8; ++c1) want |= uint64_t(want2[c1]) << (8 * c1);
+    const uint64_t key = morton3(bb.x, bb.y, bb.z) | uint64_t(bb.level) << 48;
+    const auto [it, added] = kept_index_.try_emplace(key, uint32_t(kept_.size()));
+    if (added) kept_.emplace_back();
+    kept = &kept_[it->second];
+    if (it->second < (1u << 25)) memo0 = 64 * it->second;
+    if (!(want & ~kept->known)) {
+      // Every leaf wanted has its list from an earlier run: the same visits, no split.
+      for (uint64_t w = want; w; w &= w - 1) {
+        const int m = std::countr_zero(w);
+        if (kept->len[m])
+          visit_leaf(m >> 3, m & 7,
+                     std::span<const uint32_t>(kept_tris_.data() + kept->off[m], kept->len[m]));
       }
-      if (painter_) painter_->paint(b2, b.cell[m], t2), ++stats.leaves_painted;
+      if (painter_) painter_->flush();
+      b.avg = brick_avg(b);
+      return;
     }
   }
+  split(tris, bb, k1, p1, want1);
+  for (int c1 = 0; c1 < 8; ++c1) {
+    if (!(want1 >> c1 & 1)) continue;
+    const bool any = !p1[size_t(c1)].empty();
+    if (any) split(p1[size_t(c1)], k1[c1], k2[c1], p2, want2[c1]);
+    for (int c2 = 0; c2 < 8; ++c2) {
+      if (!(want2[c1] >> c2 & 1)) continue;
+      const int m = 8 * c1 + c2;
+      if (kept) {
+        kept->off[m] = uint32_t(kept_tris_.size());
+        kept->len[m] = any ? uint32_t(p2[size_t(c2)].size()) : 0;
+        if (any) kept_tris_.insert(kept_tris_.end(), p2[size_t(c2)].begin(), p2[size_t(c2)].end());
+      }
+      if (!any || p2[size_t(c2)].empty()) continue;
+      visit_leaf(c1, c2, p2[size_t(c2)]);
+    }
+  }
+  if (kept) kept->known |= want;
   if (painter_) painter_->flush();
   b.avg = brick_avg(b);
 }
@@ -390,7 +416,8 @@ void Refiner::visit_general(GeneralNode& n, const CellBox& nb, std::span<const u
     switch (n.kind[c]) {
       case CellKind::leaf: {
         if (level >= depth_) {
-          if (painter_) painter_->paint(cb, n.leaf[c], tc), ++stats.leaves_painted;
+          if (painter_)
+            painter_->paint(cb, n.leaf[c], tc, LeafPainter::kNoMemo), ++stats.leaves_painted;
           break;
         }
         child_full();

@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdint>
 #include <span>
+#include <unordered_map>
 #include <vector>
 
 #include "geometry.hpp"
@@ -26,9 +27,13 @@ struct CellBox {
 class LeafPainter {
  public:
   virtual ~LeafPainter() = default;
+  static constexpr uint32_t kNoMemo = ~0u;
   /// `tris`: every triangle (sorted) meeting the cell; may change `cell` (samples, or add the
-  /// back sample).
-  virtual void paint(const CellBox& box, LeafCell& cell, std::span<const uint32_t> tris) = 0;
+  /// back sample). `memo`: with Refiner::keep_brick_lists, a number the refiner gives a brick's
+  /// leaf it visits (not one it builds), the same for that cell, with the same `tris`, in every
+  /// run of that refiner and no other cell's; kNoMemo for other cells.
+  virtual void paint(const CellBox& box, LeafCell& cell, std::span<const uint32_t> tris,
+                     uint32_t memo) = 0;
   /// Finishes what `paint` left pending (cells painted since the last flush stay where they are
   /// until then). Called before a node's cells are stored or averaged.
   virtual void flush() {}
@@ -57,7 +62,18 @@ class Refiner {
   void run(const Region& region, std::span<const uint32_t> tris, int depth, LeafPainter* painter);
 
   /// The box of a cell.
-  CellBox box(int level, uint32_t x, uint32_t y, uint32_t z) const;
+  CellBox box(int level, uint32_t x, uint32_t y, uint32_t z) const {
+    CellBox b;
+    b.level = level, b.x = x, b.y = y, b.z = z;
+    // The cell size divided out once per level (the same quotient).
+    const double s = level >= 0 && level <= octree::kMaxDepth
+                         ? scale_[size_t(level)]
+                         : double(ed_.texture().size()) / double(1u << level);
+    b.c = {float(origin_[0] + (double(x) + 0.5) * s), float(origin_[1] + (double(y) + 0.5) * s),
+           float(origin_[2] + (double(z) + 0.5) * s)};
+    b.h = float(0.5 * s);
+    return b;
+  }
   /// The triangles of `in` meeting the box (order kept).
   void filter(std::span<const uint32_t> in, const CellBox& b, std::vector<uint32_t>& out) const;
   /// The same for each of b's 8 children at once: a triangle is tested only against the
@@ -81,6 +97,15 @@ class Refiner {
   /// A new leaf for a cell whose triangles are `tris` (non-empty), with colours inherited from
   /// `parent` (null: background).
   LeafCell make_leaf(std::span<const uint32_t> tris, const LeafCell* parent) const;
+
+  /// Keeps, across runs (the dabs of a stroke), the triangle lists of the leaves of each brick
+  /// run() visits (not those it builds), and uses them instead of splitting the brick's lists
+  /// again when a later run wants no leaf of it the earlier ones did not. A leaf a run paints
+  /// meets the region, so every triangle meeting it is in the run's list (see run()): its list,
+  /// the triangles passing the same box tests from the root down, is the same in every run, so
+  /// the results are the same bit for bit. Only for runs with the same depth over an unchanged
+  /// mesh; off by default.
+  void keep_brick_lists(bool on) { keep_ = on; }
 
   RefineStats stats;
 
@@ -118,6 +143,8 @@ class Refiner {
 
   OctreeEditor ed_;
   const PaintSurface& s_;
+  std::array<double, octree::kMaxDepth + 1> scale_;  // cell size by level
+  double origin_[3];
   Region region_;
   int depth_ = 0;
   LeafPainter* painter_ = nullptr;
@@ -131,6 +158,16 @@ class Refiner {
   std::array<Scratch, octree::kMaxDepth + 1> scratch_;
   Split brick1_, brick2_;      // a brick's two levels
   std::vector<uint32_t> sub_;  // one sub-cell's region list
+  /// keep_brick_lists: per brick (by level and Morton code), which leaves' lists are known and
+  /// where they are in kept_tris_.
+  struct KeptBrick {
+    uint64_t known = 0;
+    uint32_t off[64], len[64];
+  };
+  bool keep_ = false;
+  std::unordered_map<uint64_t, uint32_t> kept_index_;
+  std::vector<KeptBrick> kept_;
+  std::vector<uint32_t> kept_tris_;
 };
 
 }  // namespace limn::detail

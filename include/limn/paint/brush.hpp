@@ -77,6 +77,11 @@ class StrokePainter {
   void stroke_screen(std::span<const double> xy);
   /// Ends the stroke (and its undo record). Returns its counts.
   StrokeStats end();
+  /// Whether the dabs of a stroke reuse what earlier dabs of it found that depends only on the
+  /// mesh (each brick's leaf triangle lists, each texel's nearest surface point) instead of
+  /// finding it again. On by default; the texture comes out the same bit for bit either way (off:
+  /// slower, for tests and measurements). Takes effect at the next begin().
+  void set_reuse(bool on) { reuse_ = on; }
 
  private:
   struct State;
@@ -84,6 +89,7 @@ class StrokePainter {
   const PaintSurface& s_;
   PaintHistory* history_;
   State* st_ = nullptr;
+  bool reuse_ = true;
 };
 
 /// Refines every surface cell to level `depth` (no colour change): the full ("regular") octree of
