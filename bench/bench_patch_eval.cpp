@@ -17,10 +17,10 @@
 // (useInfSharpPatch, limn's default) and without single-crease patches: Far's EvaluateBasis
 // evaluates a single-crease patch as a plain B-spline patch, ignoring its sharpness (the car and
 // other semi-sharp cages then disagree by up to 1e-2 of the diagonal), so both sides isolate
-// semi-sharp creases instead. Bfr at its defaults. Medians of 3, ms. The dev_* columns are each
-// side's largest distance to limn's grid positions over the cage's bounding-box diagonal (Far
-// should agree to float rounding; Bfr evaluates the exact limit where Far and limn use depth-3 end
-// caps).
+// semi-sharp creases instead. Bfr at its defaults. Medians of 3 after a warm-up run, ms. The dev_*
+// columns are each side's largest distance to limn's grid positions over the cage's bounding-box
+// diagonal (Far should agree to float rounding; Bfr evaluates the exact limit where Far and limn
+// use depth-3 end caps).
 //
 // Models: bigguy, monsterfrog (shared quads/), car, pole360 (shared osd/), terrain and
 // torus-dense (limn's procedural ~800k-quad cages, make_shape), or paths to meshes.
@@ -60,9 +60,12 @@ namespace {
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
-// Medians of 3 runs; `cap_ms` > 0: no more runs after one over it (the median of those done).
+// Medians of 3 runs after an untimed one (first touches of each side's fresh memory: limn's
+// first two PatchTable::points on the car took 7.5 ms, later ones 1.1); `cap_ms` > 0: no warm-up
+// run, and no more runs after one over it (the median of those done).
 template <class F>
 double median_ms(F&& f, double cap_ms = 0) {
+  if (cap_ms <= 0) f();
   std::vector<double> t;
   for (int i = 0; i < 3; ++i) {
     const double t0 = now_ms();
