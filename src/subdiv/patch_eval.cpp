@@ -281,6 +281,110 @@ __attribute__((target("avx2,fma"))) void block_regular_avx2(const uint32_t* cv, 
   }
 }
 
+// The cubic Bezier basis and its derivative, lane by lane (bezier()'s).
+__attribute__((target("avx2,fma"), always_inline)) inline void bezier_avx2(__m256 t, __m256 w[4],
+                                                                           __m256 d[4]) {
+  const __m256 one = _mm256_set1_ps(1), three = _mm256_set1_ps(3), six = _mm256_set1_ps(6);
+  const __m256 s = _mm256_sub_ps(one, t), ss = _mm256_mul_ps(s, s), tt = _mm256_mul_ps(t, t);
+  const __m256 ts = _mm256_mul_ps(t, s);
+  w[0] = _mm256_mul_ps(ss, s), w[1] = _mm256_mul_ps(three, _mm256_mul_ps(t, ss));
+  w[2] = _mm256_mul_ps(three, _mm256_mul_ps(tt, s)), w[3] = _mm256_mul_ps(tt, t);
+  d[0] = _mm256_mul_ps(_mm256_set1_ps(-3), ss);
+  d[1] = _mm256_fmsub_ps(three, ss, _mm256_mul_ps(six, ts));
+  d[2] = _mm256_fmsub_ps(six, ts, _mm256_mul_ps(three, tt));
+  d[3] = _mm256_mul_ps(three, tt);
+}
+
+// Adds point q (less o) weighted by w, w_u, w_v to the position and derivative sums.
+__attribute__((target("avx2,fma"), always_inline)) inline void weigh_avx2(
+    const float* q, const float o[3], __m256 w, __m256 w_u, __m256 w_v, __m256 p[3], __m256 pu[3],
+    __m256 pv[3]) {
+  for (int c = 0; c < 3; ++c) {
+    const __m256 qc = _mm256_set1_ps(q[c] - o[c]);
+    p[c] = _mm256_fmadd_ps(w, qc, p[c]), pu[c] = _mm256_fmadd_ps(w_u, qc, pu[c]);
+    pv[c] = _mm256_fmadd_ps(w_v, qc, pv[c]);
+  }
+}
+
+// Up to 8 points of one Gregory end cap at once, lanes across the points as block_regular_avx2:
+// the Bezier basis and the rational interior blends (eval_gregory's, in float) as weight vectors,
+// then the 20 points weighted, taken relative to the patch's first point.
+__attribute__((target("avx2,fma"))) void block_gregory_avx2(const uint32_t* cv, const float* sv,
+                                                            const float* tv, const size_t* idx,
+                                                            int n, float scale, const float* pts,
+                                                            float* pos, float* du_out,
+                                                            float* dv_out) {
+  const __m256 one = _mm256_set1_ps(1), zero = _mm256_setzero_ps();
+  const __m256 s = _mm256_loadu_ps(sv), t = _mm256_loadu_ps(tv);
+  __m256 wu[4], du[4], wv[4], dv[4];
+  bezier_avx2(s, wu, du), bezier_avx2(t, wv, dv);
+  const float* origin = pts + 3 * size_t(cv[0]);
+  const float o3[3] = {origin[0], origin[1], origin[2]};
+  __m256 p[3], pu[3], pv[3];
+  for (int c = 0; c < 3; ++c) p[c] = pu[c] = pv[c] = zero;
+
+  static constexpr int kBoundarySlot[12][3] = {{0, 0, 0},  {1, 0, 1},  {2, 0, 7},  {3, 0, 5},
+                                               {0, 1, 2},  {3, 1, 6},  {0, 2, 16}, {3, 2, 12},
+                                               {0, 3, 15}, {1, 3, 17}, {2, 3, 11}, {3, 3, 10}};
+  for (const auto& b : kBoundarySlot) {
+    const int x = b[0], y = b[1];
+    weigh_avx2(pts + 3 * size_t(cv[b[2]]), o3, _mm256_mul_ps(wu[x], wv[y]),
+               _mm256_mul_ps(du[x], wv[y]), _mm256_mul_ps(wu[x], dv[y]), p, pu, pv);
+  }
+  // Interior point of corner i: (a Fp + (D - a) Fm) / D, a and D linear in (s, t); g = 1/2
+  // where D = 0 (the corner itself, where the point's weight is 0 anyway).
+  struct Blend {
+    int x, y, fp;
+    float a0, as, at, au, av, d0, ds, dt, dd_u, dd_v;
+  };
+  static constexpr Blend kBlends[4] = {{1, 1, 3, 0, 1, 0, 1, 0, 0, 1, 1, 1, 1},
+                                       {2, 1, 8, 0, 0, 1, 0, 1, 1, -1, 1, -1, 1},
+                                       {2, 2, 13, 1, -1, 0, -1, 0, 2, -1, -1, -1, -1},
+                                       {1, 2, 18, 1, 0, -1, 0, -1, 1, 1, -1, 1, -1}};
+  for (const Blend& b : kBlends) {
+    const __m256 a = _mm256_fmadd_ps(
+        _mm256_set1_ps(b.at), t, _mm256_fmadd_ps(_mm256_set1_ps(b.as), s, _mm256_set1_ps(b.a0)));
+    const __m256 d = _mm256_fmadd_ps(
+        _mm256_set1_ps(b.dt), t, _mm256_fmadd_ps(_mm256_set1_ps(b.ds), s, _mm256_set1_ps(b.d0)));
+    const __m256 live = _mm256_cmp_ps(d, zero, _CMP_GT_OQ);
+    const __m256 dsafe = _mm256_blendv_ps(one, d, live), inv = _mm256_div_ps(one, dsafe);
+    const __m256 inv2 = _mm256_mul_ps(inv, inv);
+    const __m256 g = _mm256_blendv_ps(_mm256_set1_ps(0.5f), _mm256_mul_ps(a, inv), live);
+    const __m256 gu =
+        _mm256_and_ps(live, _mm256_mul_ps(_mm256_fmsub_ps(_mm256_set1_ps(b.au), dsafe,
+                                                          _mm256_mul_ps(a, _mm256_set1_ps(b.dd_u))),
+                                          inv2));
+    const __m256 gv =
+        _mm256_and_ps(live, _mm256_mul_ps(_mm256_fmsub_ps(_mm256_set1_ps(b.av), dsafe,
+                                                          _mm256_mul_ps(a, _mm256_set1_ps(b.dd_v))),
+                                          inv2));
+    const __m256 w = _mm256_mul_ps(wu[b.x], wv[b.y]), w_u = _mm256_mul_ps(du[b.x], wv[b.y]),
+                 w_v = _mm256_mul_ps(wu[b.x], dv[b.y]);
+    const __m256 h = _mm256_sub_ps(one, g);
+    weigh_avx2(pts + 3 * size_t(cv[b.fp]), o3, _mm256_mul_ps(w, g),
+               _mm256_fmadd_ps(w_u, g, _mm256_mul_ps(w, gu)),
+               _mm256_fmadd_ps(w_v, g, _mm256_mul_ps(w, gv)), p, pu, pv);
+    weigh_avx2(pts + 3 * size_t(cv[b.fp + 1]), o3, _mm256_mul_ps(w, h),
+               _mm256_fmsub_ps(w_u, h, _mm256_mul_ps(w, gu)),
+               _mm256_fmsub_ps(w_v, h, _mm256_mul_ps(w, gv)), p, pu, pv);
+  }
+  alignas(32) float out[3][3][kLanes];  // position, du, dv; x y z; lanes
+  const __m256 sc = _mm256_set1_ps(scale);
+  for (int c = 0; c < 3; ++c) {
+    _mm256_store_ps(out[0][c], _mm256_add_ps(p[c], _mm256_set1_ps(o3[c])));
+    _mm256_store_ps(out[1][c], _mm256_mul_ps(pu[c], sc));
+    _mm256_store_ps(out[2][c], _mm256_mul_ps(pv[c], sc));
+  }
+  for (int l = 0; l < n; ++l) {
+    const size_t o = 3 * size_t(idx[l]);
+    for (int c = 0; c < 3; ++c) {
+      pos[o + c] = out[0][c][l];
+      if (du_out) du_out[o + c] = out[1][c][l];
+      if (dv_out) dv_out[o + c] = out[2][c][l];
+    }
+  }
+}
+
 // One point of any patch, the scalar way.
 void eval_point(const PatchTable& table, const float* pts, const PatchCoord& c, const PatchParam& p,
                 float* pos, float* du, float* dv) {
@@ -449,14 +553,18 @@ void evaluate_grids(const PatchTable& table, std::span<const float> points, int 
       uint32_t i0, i1, j0, j1;
       range(p.u, p.depth, i0, i1), range(p.v, p.depth, j0, j1);
       const float cells = float(1u << p.depth), inv = 1.0f / float(m);
-      const bool block = avx2 && regular && p.type == PatchType::regular;
-      const uint32_t* cv = regular ? &table.regular_points[16 * patch] : nullptr;
+      const bool block = avx2 && (regular ? p.type == PatchType::regular : true);
+      const uint32_t* cv =
+          regular ? &table.regular_points[16 * patch] : &table.gregory_points[20 * (patch - nr)];
       int lanes = 0;
       auto flush = [&] {
         if (lanes == 0) return;
         for (int l = lanes; l < kLanes; ++l) sv[l] = sv[0], tv[l] = tv[0];
-        block_regular_avx2(cv, p.boundary, sv, tv, idx, lanes, cells, points.data(), position, du,
-                           dv);
+        if (regular)
+          block_regular_avx2(cv, p.boundary, sv, tv, idx, lanes, cells, points.data(), position, du,
+                             dv);
+        else
+          block_gregory_avx2(cv, sv, tv, idx, lanes, cells, points.data(), position, du, dv);
         lanes = 0;
       };
       for (uint32_t j = j0; j <= j1; ++j)  // empty where the patch holds no grid line
