@@ -226,6 +226,28 @@ __attribute__((target("avx2,fma"), always_inline)) inline void fold_avx2(__m256 
   if (high) w[2] = _mm256_fmadd_ps(two, w[3], w[2]), w[1] = _mm256_sub_ps(w[1], w[3]), w[3] = zero;
 }
 
+// Writes lane l's sums (position back at o, derivatives scaled to ptex units) to point idx[l]
+// of the outputs, for the first n lanes.
+__attribute__((target("avx2,fma"), always_inline)) inline void store_lanes_avx2(
+    const __m256 p[3], const __m256 pu[3], const __m256 pv[3], const float o[3], float scale,
+    const size_t* idx, int n, float* pos, float* du_out, float* dv_out) {
+  alignas(32) float out[3][3][kLanes];  // position, du, dv; x y z; lanes
+  const __m256 sc = _mm256_set1_ps(scale);
+  for (int c = 0; c < 3; ++c) {
+    _mm256_store_ps(out[0][c], _mm256_add_ps(p[c], _mm256_set1_ps(o[c])));
+    _mm256_store_ps(out[1][c], _mm256_mul_ps(pu[c], sc));
+    _mm256_store_ps(out[2][c], _mm256_mul_ps(pv[c], sc));
+  }
+  for (int l = 0; l < n; ++l) {
+    const size_t at = 3 * size_t(idx[l]);
+    for (int c = 0; c < 3; ++c) {
+      pos[at + c] = out[0][c][l];
+      if (du_out) du_out[at + c] = out[1][c][l];
+      if (dv_out) dv_out[at + c] = out[2][c][l];
+    }
+  }
+}
+
 // sv, tv: kLanes patch coordinates (lanes past n padded with any value in [0, 1]); lane l's
 // results go to point idx[l] of the outputs.
 __attribute__((target("avx2,fma"))) void block_regular_avx2(const uint32_t* cv, uint8_t boundary,
@@ -264,21 +286,7 @@ __attribute__((target("avx2,fma"))) void block_regular_avx2(const uint32_t* cv, 
       pv[c] = _mm256_fmadd_ps(dv[y], rp[c], pv[c]);
     }
   }
-  alignas(32) float out[3][3][kLanes];  // position, du, dv; x y z; lanes
-  const __m256 sc = _mm256_set1_ps(scale);
-  for (int c = 0; c < 3; ++c) {
-    _mm256_store_ps(out[0][c], _mm256_add_ps(p[c], _mm256_set1_ps(o3[c])));
-    _mm256_store_ps(out[1][c], _mm256_mul_ps(pu[c], sc));
-    _mm256_store_ps(out[2][c], _mm256_mul_ps(pv[c], sc));
-  }
-  for (int l = 0; l < n; ++l) {
-    const size_t o = 3 * size_t(idx[l]);
-    for (int c = 0; c < 3; ++c) {
-      pos[o + c] = out[0][c][l];
-      if (du_out) du_out[o + c] = out[1][c][l];
-      if (dv_out) dv_out[o + c] = out[2][c][l];
-    }
-  }
+  store_lanes_avx2(p, pu, pv, o3, scale, idx, n, pos, du_out, dv_out);
 }
 
 // The cubic Bezier basis and its derivative, lane by lane (bezier()'s).
@@ -368,21 +376,7 @@ __attribute__((target("avx2,fma"))) void block_gregory_avx2(const uint32_t* cv, 
                _mm256_fmsub_ps(w_u, h, _mm256_mul_ps(w, gu)),
                _mm256_fmsub_ps(w_v, h, _mm256_mul_ps(w, gv)), p, pu, pv);
   }
-  alignas(32) float out[3][3][kLanes];  // position, du, dv; x y z; lanes
-  const __m256 sc = _mm256_set1_ps(scale);
-  for (int c = 0; c < 3; ++c) {
-    _mm256_store_ps(out[0][c], _mm256_add_ps(p[c], _mm256_set1_ps(o3[c])));
-    _mm256_store_ps(out[1][c], _mm256_mul_ps(pu[c], sc));
-    _mm256_store_ps(out[2][c], _mm256_mul_ps(pv[c], sc));
-  }
-  for (int l = 0; l < n; ++l) {
-    const size_t o = 3 * size_t(idx[l]);
-    for (int c = 0; c < 3; ++c) {
-      pos[o + c] = out[0][c][l];
-      if (du_out) du_out[o + c] = out[1][c][l];
-      if (dv_out) dv_out[o + c] = out[2][c][l];
-    }
-  }
+  store_lanes_avx2(p, pu, pv, o3, scale, idx, n, pos, du_out, dv_out);
 }
 
 // One point of any patch, the scalar way.
