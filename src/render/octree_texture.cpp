@@ -38,6 +38,10 @@ int oct_side(uint tag, vec3 n) {
 bool oct_bit64(uvec2 m, int k) {
   return k < 32 ? ((m.x >> k) & 1u) != 0u : ((m.y >> (k - 32)) & 1u) != 0u;
 }
+// Byte k (0-7) of a 64-bit mask: the 8 cells of a brick's level + 1 cell k.
+uint oct_byte64(uvec2 m, int k) {
+  return k < 4 ? (m.x >> (8 * k)) & 255u : (m.y >> (8 * (k - 4))) & 255u;
+}
 uint oct_below64(uvec2 m, int k) {
   if (k < 32) return uint(bitCount(m.x & ((1u << k) - 1u)));
   return uint(bitCount(m.x)) + uint(bitCount(m.y & ((1u << (k - 32)) - 1u)));
@@ -56,9 +60,7 @@ bool oct_brick_leaf(uint word, int level, uvec3 c, vec3 n, out uint col, out int
   int m = int(oct_octant(c, kD - 1 - level) * 8u + oct_octant(c, kD - 2 - level));
   ended = level + 2;
   if (!oct_bit64(mask, m)) {
-    int c1 = m >> 3;
-    uint byte = c1 < 4 ? (mask.x >> (8 * c1)) & 255u : (mask.y >> (8 * (c1 - 4))) & 255u;
-    if (byte == 0u) ended = (mask.x | mask.y) != 0u ? level + 1 : level;
+    if (oct_byte64(mask, m >> 3) == 0u) ended = (mask.x | mask.y) != 0u ? level + 1 : level;
     return false;
   }
   uvec2 dbl = uvec2(0u);
@@ -183,8 +185,7 @@ bool oct_cell_value(uvec3 c, int level, vec3 n, out uint col) {
         uvec2 mask = uvec2(pool[bp], pool[bp + 1u]);
         uvec2 dm = (w & kFlag) != 0u ? uvec2(pool[bp + 2u], pool[bp + 3u]) : uvec2(0u);
         int c1 = int(oct_octant(c, kD - 2 - l));
-        uint byte = c1 < 4 ? (mask.x >> (8 * c1)) & 255u : (mask.y >> (8 * (c1 - 4))) & 255u;
-        if (byte == 0u) return false;
+        if (oct_byte64(mask, c1) == 0u) return false;
         uint count = uint(bitCount(mask.x)) + uint(bitCount(mask.y));
         uint at = bp + hdr + 1u + (count + 7u) / 8u + oct_below64(mask, 8 * c1) +
                   oct_below64(dm, 8 * c1);

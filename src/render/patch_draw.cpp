@@ -382,8 +382,8 @@ void line_rates(const Mesh& cage, const Topology& topo, const Camera& camera, fl
     scratch.set.clear();
     lo = 0, hi = ne + nf;
   }
-  for (const uint32_t i : scratch.set)
-    out[i] = 0.0f, lo = std::min<size_t>(lo, i), hi = std::max<size_t>(hi, i + 1);
+  auto changed = [&](size_t i) { lo = std::min(lo, i), hi = std::max(hi, i + 1); };
+  for (const uint32_t i : scratch.set) out[i] = 0.0f, changed(i);
   scratch.set.clear();
   for (const uint32_t f : scratch.seen_list) scratch.face_seen[f] = 0;
   scratch.seen_list.clear();
@@ -430,14 +430,12 @@ void line_rates(const Mesh& cage, const Topology& topo, const Camera& camera, fl
         out[e] = std::isnan(a[0]) || std::isnan(b[0])
                      ? 1e6f
                      : float(std::hypot(a[0] - b[0], a[1] - b[1]) / double(pps));
-        scratch.set.push_back(e);
-        lo = std::min<size_t>(lo, e), hi = std::max<size_t>(hi, e + 1);
+        scratch.set.push_back(e), changed(e);
       }
       m = std::max(m, out[e]);
     }
     out[ne + f] = m;
-    scratch.set.push_back(uint32_t(ne + f));
-    lo = std::min<size_t>(lo, ne + f), hi = std::max<size_t>(hi, ne + f + 1);
+    scratch.set.push_back(uint32_t(ne + f)), changed(ne + f);
   }
   scratch.dirty_lo = lo == SIZE_MAX ? 0 : lo, scratch.dirty_hi = lo == SIZE_MAX ? 0 : hi;
 }
