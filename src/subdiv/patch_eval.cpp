@@ -537,10 +537,20 @@ void evaluate_grids(const PatchTable& table, std::span<const float> points, int 
     hi = o + 1 == cells ? uint32_t(m) : uint32_t((end - 1) >> d);
   };
   const bool avx2 = have_avx2();
+  // Patches by ptex face (a counting sort): a table lists them level by level, so threads
+  // taking ranges of it would write the same faces' grids at once, sharing cache lines.
+  auto ptex_of = [&](size_t patch) {
+    return patch < nr ? table.regular_params[patch].ptex : table.gregory_params[patch - nr].ptex;
+  };
+  std::vector<uint32_t> first(size_t(table.ptex_count) + 1, 0), order(np);
+  for (size_t patch = 0; patch < np; ++patch) ++first[ptex_of(patch) + 1];
+  for (size_t g = 0; g < table.ptex_count; ++g) first[g + 1] += first[g];
+  for (size_t patch = 0; patch < np; ++patch) order[first[ptex_of(patch)]++] = uint32_t(patch);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, np, 64), [&](const auto& r) {
     alignas(32) float sv[kLanes], tv[kLanes];
     size_t idx[kLanes];
-    for (size_t patch = r.begin(); patch != r.end(); ++patch) {
+    for (size_t at = r.begin(); at != r.end(); ++at) {
+      const size_t patch = order[at];
       const bool regular = patch < nr;
       const PatchParam& p =
           regular ? table.regular_params[patch] : table.gregory_params[patch - nr];

@@ -242,11 +242,22 @@ struct RingView {
   }
 };
 
+// Marks, while a table is built, an end-cap point that is not a plain id: in gregory_points a
+// face point (a row of gregory_face_stencils), in gregory_face_stencils' indices a corner point
+// (a row of gregory_stencils). Builder::build and RegionBuilder::finish give them global ids.
+constexpr uint32_t kCapRef = 1u << 31;
+
 // Gregory end-cap points of one quad (OpenSubdiv's GregoryConverter; see the file comment).
+// The corner points (P, Ep, Em) are functions of a corner's fan alone, so end caps that share a
+// corner share them (Builder::emit_cap keeps one row each); the face points are short rows over
+// those and four ring points, not the corner points' expansions (pole360's 360 end caps around
+// one vertex repeated its 721-point ring in each of their 20 rows).
 class GregoryCap {
  public:
   struct Corner {
     uint32_t v = 0;              // global point id
+    uint32_t fan = 0;            // the smallest face of its span: which of v's fans
+    int fan_at = 0;              // its place in the span (where an interior fan's ring starts)
     std::vector<uint32_t> ring;  // global ids: edge end 2m, face diagonal 2m + 1
     int faces = 0, face_in_ring = 0, valence = 0;
     bool boundary = false, sharp = false, regular = false;
@@ -256,11 +267,22 @@ class GregoryCap {
   };
 
   Corner c[4];
-  Terms p[4], ep[4], em[4], fp[4], fm[4];
+  Terms p[4], ep[4], em[4];
   std::vector<uint32_t> support;  // ids of the corners and their rings, each once, as met
   std::vector<uint32_t> slots;    // by point id - first: place in support (its entries only)
-  std::vector<uint32_t> row_idx;  // emit_rows' scratch: the rows' terms before they are copied
+  std::vector<uint32_t> row_idx;  // emit_row's scratch: a row's terms before they are copied
   std::vector<float> row_w;
+
+  // Appends the row `t` to `table`; returns its index.
+  uint32_t emit_row(const Terms& t, StencilTable& table) {
+    if (row_idx.size() < support.size())
+      row_idx.resize(support.size()), row_w.resize(support.size());
+    const size_t n = t.emit(row_idx.data(), row_w.data());
+    table.indices.insert(table.indices.end(), row_idx.begin(), row_idx.begin() + long(n));
+    table.weights.insert(table.weights.end(), row_w.begin(), row_w.begin() + long(n));
+    table.offsets.push_back(uint32_t(table.indices.size()));
+    return uint32_t(table.size() - 1);
+  }
 
   // Ready for another patch, keeping the buffers.
   void reset() {
@@ -273,14 +295,13 @@ class GregoryCap {
   }
   // `first`, `count`: the range of point ids the corners and rings lie in (one level's).
   void finish_topology(uint32_t first, uint32_t count);
-  void emit_rows(StencilTable& table);
-  void compute();
-
- private:
+  // Corner i's P, Ep and Em as terms over the support.
   void edge_points(int i);
-  void face_points(int i);
-  void irregular_face_point(int near, int edge, int far, const Terms& e_near, const Terms& e_far,
-                            double sign, Terms& out) const;
+  // Appends corner i's face point Fp (plus) or Fm to `table`: over the four corners where both
+  // corners of its edge are regular, else over the corner points (rows p, e_near, e_far of
+  // gregory_stencils) and four ring points. Returns its row.
+  uint32_t emit_face_point(int i, bool plus, uint32_t p, uint32_t e_near, uint32_t e_far,
+                           StencilTable& table) const;
 };
 
 class Builder {
@@ -329,6 +350,17 @@ class Builder {
   std::vector<uint32_t> level_offsets_{0};  // first global point id of each level, as refined
   std::vector<std::vector<uint32_t>> node_of_level_;  // hierarchy: node of each level's faces
   GregoryCap cap_;                                    // reused: its buffers stay allocated
+  // cap_'s rows into out_: its corner points shared with the level's earlier end caps at the
+  // same corner fans; ids gets the 20 points (face points marked kCapRef).
+  void emit_cap(size_t k, const RefinedLevel& R, const uint32_t a[4], uint32_t ids[20]);
+  // The corner points made so far at this level: per vertex a list of (fan, ring edge or kNone
+  // for P, row of gregory_stencils).
+  struct SharedRow {
+    uint32_t fan, to, row, next;
+  };
+  std::vector<uint32_t> shared_head_;  // per vertex of level shared_level_; kNone: none yet
+  std::vector<SharedRow> shared_;
+  size_t shared_level_ = ~size_t(0);
   Ring spans_[4];  // a patch's corner spans (end caps; regular patches cut by sharp edges)
   mutable Ring span_scratch_;  // regular_vertex_inf's
 };
@@ -787,8 +819,7 @@ void GregoryCap::finish_topology(uint32_t first, uint32_t count) {
     for (const uint32_t id : k.ring) take(id);
   }
   for (int i = 0; i < 4; ++i)
-    for (Terms* t : {&p[i], &ep[i], &em[i], &fp[i], &fm[i]})
-      t->reset(support, slots.data(), first, count);
+    for (Terms* t : {&p[i], &ep[i], &em[i]}) t->reset(support, slots.data(), first, count);
   const double pi = std::numbers::pi;
   for (Corner& k : c) {
     k.valence = k.faces + (k.boundary ? 1 : 0);
@@ -914,56 +945,32 @@ void GregoryCap::edge_points(int i) {
   }
 }
 
-void GregoryCap::irregular_face_point(int near, int edge, int far, const Terms& e_near,
-                                      const Terms& e_far, double sign, Terms& out) const {
-  const Corner& k = c[near];
-  const double cn = k.cos_angle, cf = c[far].cos_angle;
-  out.add(p[near], cf / 3.0);
-  out.add(e_near, (3.0 - 2.0 * cn - cf) / 3.0);
-  out.add(e_far, 2.0 * cn / 3.0);
-  const int n = k.valence, prev = (edge + n - 1) % n, next = (edge + 1) % n;
-  out.add(k.ring[2 * size_t(prev)], -sign / 9.0);
-  out.add(k.ring[2 * size_t(prev) + 1], -sign / 18.0);
-  out.add(k.ring[2 * size_t(edge) + 1], sign / 18.0);
-  out.add(k.ring[2 * size_t(next)], sign / 9.0);
-}
-
-void GregoryCap::face_points(int i) {
+uint32_t GregoryCap::emit_face_point(int i, bool plus, uint32_t p_row, uint32_t e_near,
+                                     uint32_t e_far, StencilTable& table) const {
   const Corner& k = c[i];
-  const int next = (i + 1) & 3, opp = (i + 2) & 3, prev = (i + 3) & 3;
-  auto regular = [&](Terms& out) {
-    out.add(k.v, 4.0 / 9.0), out.add(c[prev].v, 2.0 / 9.0), out.add(c[next].v, 2.0 / 9.0);
-    out.add(c[opp].v, 1.0 / 9.0);
+  const int far = plus ? (i + 1) & 3 : (i + 3) & 3;
+  auto put = [&](uint32_t id, double w) {
+    if (w != 0.0) table.indices.push_back(id), table.weights.push_back(float(w));
   };
-  if (k.fp_regular) regular(fp[i]);
-  if (k.fm_regular) regular(fm[i]);
-  if (!k.fp_regular && !k.fp_copied)
-    irregular_face_point(i, k.face_in_ring, next, ep[i], em[next], 1.0, fp[i]);
-  if (!k.fm_regular && !k.fm_copied)
-    irregular_face_point(i, (k.face_in_ring + 1) % k.valence, prev, em[i], ep[prev], -1.0, fm[i]);
-  if (k.fp_copied) fp[i] = fm[i];
-  if (k.fm_copied) fm[i] = fp[i];
-}
-
-// The 20 rows in point order (corner i: P, Ep, Em, Fp, Fm): gathered in a reused scratch, then
-// appended in one copy per array.
-void GregoryCap::emit_rows(StencilTable& table) {
-  const size_t room = 20 * support.size();
-  if (row_idx.size() < room) row_idx.resize(room), row_w.resize(room);
-  const size_t at = table.indices.size();
-  size_t n = 0;
-  for (int i = 0; i < 4; ++i)
-    for (const Terms* row : {&p[i], &ep[i], &em[i], &fp[i], &fm[i]}) {
-      n += row->emit(row_idx.data() + n, row_w.data() + n);
-      table.offsets.push_back(uint32_t(at + n));
-    }
-  table.indices.insert(table.indices.end(), row_idx.begin(), row_idx.begin() + long(n));
-  table.weights.insert(table.weights.end(), row_w.begin(), row_w.begin() + long(n));
-}
-
-void GregoryCap::compute() {
-  for (int i = 0; i < 4; ++i) edge_points(i);
-  for (int i = 0; i < 4; ++i) face_points(i);
+  if (plus ? k.fp_regular : k.fm_regular) {
+    put(k.v, 4.0 / 9.0), put(c[(i + 3) & 3].v, 2.0 / 9.0), put(c[(i + 1) & 3].v, 2.0 / 9.0);
+    put(c[(i + 2) & 3].v, 1.0 / 9.0);
+  } else {
+    // Loop et al.'s face point: the corner's limit point and the two edge points meeting the
+    // patch edge, and the rotation of the ring across it.
+    const double cn = k.cos_angle, cf = c[far].cos_angle, sign = plus ? 1.0 : -1.0;
+    put(kCapRef | p_row, cf / 3.0);
+    put(kCapRef | e_near, (3.0 - 2.0 * cn - cf) / 3.0);
+    put(kCapRef | e_far, 2.0 * cn / 3.0);
+    const int n = k.valence, edge = plus ? k.face_in_ring : (k.face_in_ring + 1) % n;
+    const int prev = (edge + n - 1) % n, next = (edge + 1) % n;
+    put(k.ring[2 * size_t(prev)], -sign / 9.0);
+    put(k.ring[2 * size_t(prev) + 1], -sign / 18.0);
+    put(k.ring[2 * size_t(edge) + 1], sign / 18.0);
+    put(k.ring[2 * size_t(next)], sign / 9.0);
+  }
+  table.offsets.push_back(uint32_t(table.indices.size()));
+  return uint32_t(table.size() - 1);
 }
 
 // Room in the table's arrays for this level's patches and, judging by this level, the levels
@@ -992,10 +999,16 @@ void Builder::reserve_output(size_t k, const Level& L, const RefinedLevel& R) {
   room(out.regular_params, regular * levels);
   room(out.gregory_points, 20 * caps);
   room(out.gregory_params, caps);
-  StencilTable& g = out.gregory_stencils;
-  const size_t per_cap = g.size() ? 20 * g.indices.size() / g.size() : 160;
-  room(g.offsets, 20 * caps);
-  room(g.indices, per_cap * caps), room(g.weights, per_cap * caps);
+  // Rows and entries per end cap so far (a first guess before any: corner points shared by
+  // about two end caps, face points of about six entries).
+  const size_t made = out.gregory_params.size();
+  for (StencilTable* g : {&out.gregory_stencils, &out.gregory_face_stencils}) {
+    const bool corner = g == &out.gregory_stencils;
+    const size_t rows = made ? g->size() / made + 1 : corner ? 6 : 8;
+    const size_t entries = made ? g->indices.size() / made + 1 : corner ? 60 : 48;
+    room(g->offsets, rows * caps);
+    room(g->indices, entries * caps), room(g->weights, entries * caps);
+  }
 }
 
 void Builder::emit(size_t k, const SparseLevel& S) {
@@ -1177,6 +1190,8 @@ void Builder::emit(size_t k, const SparseLevel& S) {
           span(L, R, corner[i], cc.sharp, spans_[i]);
           if (!g.all_quads) throw std::logic_error("patches: an end cap next to a non-quad");
           cc.v = off + a[i];
+          const auto least = std::min_element(g.face.begin(), g.face.end());
+          cc.fan = *least, cc.fan_at = int(least - g.face.begin());
           cc.faces = int(g.face.size());
           cc.face_in_ring = int(std::find(g.face.begin(), g.face.end(), f) - g.face.begin());
           cc.boundary = g.boundary;
@@ -1185,10 +1200,9 @@ void Builder::emit(size_t k, const SparseLevel& S) {
           if (g.boundary) cc.ring.push_back(off + g.edge_end.back());
         }
         cap.finish_topology(off, uint32_t(R.vertex_count()));
-        cap.compute();
-        const uint32_t first = uint32_t(out.gregory_stencils.size());
-        cap.emit_rows(out.gregory_stencils);
-        for (uint32_t q = 0; q < 20; ++q) out.gregory_points.push_back(first + q);
+        uint32_t ids[20];
+        emit_cap(k, R, a, ids);
+        out.gregory_points.insert(out.gregory_points.end(), ids, ids + 20);
         out.gregory_params.push_back(pp);
         if (stats) ++stats->gregory_by_level[k];
       }
@@ -1196,6 +1210,69 @@ void Builder::emit(size_t k, const SparseLevel& S) {
   }
   level_offsets_.push_back(level_offsets_.back() + uint32_t(S.level.vertex_count()));
   emit_ms_ += ms_since(t0);
+}
+
+void Builder::emit_cap(size_t k, const RefinedLevel& R, const uint32_t a[4], uint32_t ids[20]) {
+  GregoryCap& cap = cap_;
+  StencilTable& corners = out_.gregory_stencils;
+  if (shared_level_ != k) {
+    shared_head_.assign(R.vertex_count(), kNone);
+    shared_.clear();
+    shared_level_ = k;
+  }
+  auto find = [&](uint32_t v, uint32_t fan, uint32_t to) {
+    for (uint32_t e = shared_head_[v]; e != kNone; e = shared_[e].next)
+      if (shared_[e].fan == fan && shared_[e].to == to) return shared_[e].row;
+    return kNone;
+  };
+  uint32_t rows[4][3];  // P, Ep, Em of each corner
+  for (int i = 0; i < 4; ++i) {
+    const GregoryCap::Corner& c = cap.c[i];
+    // Ep runs along ring edge face_in_ring, Em along the next; an interior fan's ring starts at
+    // the patch's face, so its edges are counted from the fan's smallest face (not by their far
+    // ends: two edges may join the same two points).
+    auto edge = [&](int m) {
+      return uint32_t(c.boundary ? m : (m - c.fan_at + 2 * c.faces) % c.faces);
+    };
+    const uint32_t to[3] = {kNone, edge(c.face_in_ring), edge(c.face_in_ring + 1)};
+    bool made = false;
+    for (int j = 0; j < 3; ++j) {
+      rows[i][j] = find(a[i], c.fan, to[j]);
+      if (rows[i][j] != kNone) continue;
+      if (!made) cap.edge_points(i), made = true;
+      const Terms& t = j == 0 ? cap.p[i] : j == 1 ? cap.ep[i] : cap.em[i];
+      rows[i][j] = cap.emit_row(t, corners);
+      shared_.push_back({c.fan, to[j], rows[i][j], shared_head_[a[i]]});
+      shared_head_[a[i]] = uint32_t(shared_.size() - 1);
+    }
+  }
+  StencilTable& faces = out_.gregory_face_stencils;
+  for (int i = 0; i < 4; ++i) {
+    const GregoryCap::Corner& c = cap.c[i];
+    const int next = (i + 1) & 3, prev = (i + 3) & 3;
+    uint32_t fp = kNone, fm = kNone;
+    // On a boundary patch edge both face points are the same point.
+    if (!c.fp_copied)
+      fp = cap.emit_face_point(i, true, rows[i][0], rows[i][1], rows[next][2], faces);
+    if (!c.fm_copied)
+      fm = cap.emit_face_point(i, false, rows[i][0], rows[i][2], rows[prev][1], faces);
+    if (c.fp_copied) fp = fm;
+    if (c.fm_copied) fm = fp;
+    ids[5 * i] = rows[i][0], ids[5 * i + 1] = rows[i][1], ids[5 * i + 2] = rows[i][2];
+    ids[5 * i + 3] = kCapRef | fp, ids[5 * i + 4] = kCapRef | fm;
+  }
+}
+
+// End-cap points come after every level's, corner points first: their ids, counted from 0 in
+// each table and marked kCapRef where they could be taken for something else, become global.
+void resolve_cap_points(PatchTable& t) {
+  const uint64_t corners = t.level_offsets.back(), faces = corners + t.gregory_stencils.size();
+  if (faces + t.gregory_face_stencils.size() >= kCapRef)
+    throw InputError("patches: more than 2^31 points");
+  for (uint32_t& p : t.gregory_points)
+    p = uint32_t(p & kCapRef ? faces + (p & ~kCapRef) : corners + p);
+  for (uint32_t& p : t.gregory_face_stencils.indices)
+    if (p & kCapRef) p = uint32_t(corners + (p & ~kCapRef));
 }
 
 // prune_points gives a level's spare room back only past this many bytes.
@@ -1210,6 +1287,8 @@ void prune_points(PatchTable& t) {
   std::vector<uint8_t> need(t.level_offsets.back(), 0);
   for (const uint32_t p : t.regular_points) need[p] = 1;
   for (const uint32_t p : t.gregory_stencils.indices) need[p] = 1;
+  for (const uint32_t p : t.gregory_face_stencils.indices)
+    if (!(p & kCapRef)) need[p] = 1;
   for (size_t k = nl - 1; k >= 1; --k) {
     const StencilTable& s = t.level_stencils[k - 1];
     const uint32_t base = t.level_offsets[k], prev = t.level_offsets[k - 1];
@@ -1251,6 +1330,8 @@ void prune_points(PatchTable& t) {
   }
   for (uint32_t& p : t.regular_points) p = id[p];
   for (uint32_t& p : t.gregory_stencils.indices) p = id[p];
+  for (uint32_t& p : t.gregory_face_stencils.indices)
+    if (!(p & kCapRef)) p = id[p];
   t.level_offsets = std::move(offsets);
 }
 
@@ -1263,9 +1344,7 @@ void Builder::build(PatchTable& out, SparseRefinement& r, PatchStats* stats) {
   prune_points(out);
   out.ptex_count = ptex_count_;
   out.ptex_of_face = ptex_offsets(cage_);
-  // End-cap points come after every level's: their ids were counted from 0.
-  const uint32_t cap_base = out.level_offsets.back();
-  for (uint32_t& p : out.gregory_points) p += cap_base;
+  resolve_cap_points(out);
   if (stats) {
     stats->regular_by_level.resize(out.level_offsets.size() - 1, 0);
     stats->gregory_by_level.resize(out.level_offsets.size() - 1, 0);
@@ -1277,19 +1356,29 @@ void Builder::build(PatchTable& out, SparseRefinement& r, PatchStats* stats) {
 }  // namespace
 
 std::vector<float> PatchTable::points(std::span<const float> cage) const {
+  std::vector<float> out(3 * point_count());
+  points(cage, out);
+  return out;
+}
+
+void PatchTable::points(std::span<const float> cage, std::span<float> out) const {
   if (selection)
     throw InputError("patches: a selection has no points of its own; use its hierarchy's");
   if (cage.size() != 3 * size_t(level_offsets.at(1)))
     throw InputError(fmt::format("patches: {} cage coordinates for {} points", cage.size(),
                                  3 * size_t(level_offsets.at(1))));
-  std::vector<float> out(3 * point_count());
+  if (out.size() != 3 * point_count())
+    throw InputError(
+        fmt::format("patches: room for {} coordinates, {} needed", out.size(), 3 * point_count()));
   std::copy(cage.begin(), cage.end(), out.begin());
   for (size_t k = 0; k < level_stencils.size(); ++k)
     apply_stencils(level_stencils[k], out.data() + 3 * size_t(level_offsets[k]),
                    out.data() + 3 * size_t(level_offsets[k + 1]), 3);
+  const size_t corners = level_offsets.back(), faces = corners + gregory_stencils.size();
   if (gregory_stencils.size())
-    apply_stencils(gregory_stencils, out.data(), out.data() + 3 * size_t(level_offsets.back()), 3);
-  return out;
+    apply_stencils(gregory_stencils, out.data(), out.data() + 3 * corners, 3);
+  if (gregory_face_stencils.size())
+    apply_stencils(gregory_face_stencils, out.data(), out.data() + 3 * faces, 3);
 }
 
 namespace {
@@ -1635,26 +1724,44 @@ class RegionBuilder {
         out_.regular_points.push_back(local(t.regular_points[j], pp.level));
       out_.regular_params.push_back(place(pp));
     }
-    const uint32_t cap_base = t.level_offsets.back();
-    const uint32_t cap_shift = uint32_t(out_.gregory_stencils.size());
+    // End-cap points: corner rows after the earlier regions' corner rows, face rows after
+    // theirs (marked kCapRef until finish()); a row's level is its end caps' (all of a cap's
+    // points are of its level).
+    const StencilTable &g = t.gregory_stencils, &gf = t.gregory_face_stencils;
+    StencilTable &dg = out_.gregory_stencils, &dgf = out_.gregory_face_stencils;
+    const uint32_t cap_base = t.level_offsets.back(), face_base = cap_base + uint32_t(g.size());
+    const uint32_t corner_shift = uint32_t(dg.size()), face_shift = uint32_t(dgf.size());
+    corner_level_.resize(corner_shift + g.size(), 0);
+    face_level_.resize(face_shift + gf.size(), 0);
     for (size_t i = 0; i < t.gregory_params.size(); ++i) {
+      const uint8_t k = t.gregory_params[i].level;
       for (size_t j = 20 * i; j < 20 * i + 20; ++j) {
-        const uint32_t row = t.gregory_points[j] - cap_base;
-        if (row / 20 != i) throw std::logic_error("patches: an end cap reads another's points");
-        out_.gregory_points.push_back(cap_shift + row);
+        const uint32_t p = t.gregory_points[j];
+        if (p < cap_base) throw std::logic_error("patches: an end cap reads a refined point");
+        if (p < face_base) {
+          corner_level_[corner_shift + p - cap_base] = k;
+          out_.gregory_points.push_back(corner_shift + (p - cap_base));
+        } else {
+          face_level_[face_shift + p - face_base] = k;
+          out_.gregory_points.push_back(kCapRef | (face_shift + (p - face_base)));
+        }
       }
       out_.gregory_params.push_back(place(t.gregory_params[i]));
     }
-    const StencilTable& g = t.gregory_stencils;
-    StencilTable& dg = out_.gregory_stencils;
-    const uint32_t shift = uint32_t(dg.indices.size());
-    for (size_t row = 0; row < g.size(); ++row) {
-      const uint32_t k = t.gregory_params[row / 20].level;
-      for (uint32_t j = g.offsets[row]; j < g.offsets[row + 1]; ++j)
-        dg.indices.push_back(local(g.indices[j], k));
-      dg.offsets.push_back(shift + g.offsets[row + 1]);
-    }
-    dg.weights.insert(dg.weights.end(), g.weights.begin(), g.weights.end());
+    auto append = [&](const StencilTable& src, StencilTable& dst, const uint8_t* level) {
+      const uint32_t shift = uint32_t(dst.indices.size());
+      for (size_t row = 0; row < src.size(); ++row) {
+        for (uint32_t j = src.offsets[row]; j < src.offsets[row + 1]; ++j) {
+          const uint32_t p = src.indices[j];
+          dst.indices.push_back(p >= cap_base ? kCapRef | (corner_shift + (p - cap_base))
+                                              : local(p, level[row]));
+        }
+        dst.offsets.push_back(shift + src.offsets[row + 1]);
+      }
+      dst.weights.insert(dst.weights.end(), src.weights.begin(), src.weights.end());
+    };
+    append(g, dg, &corner_level_[corner_shift]);
+    append(gf, dgf, &face_level_[face_shift]);
     if (stats) {
       for (auto [to, from] : {std::pair{&stats->regular_by_level, &ps.regular_by_level},
                               std::pair{&stats->gregory_by_level, &ps.gregory_by_level}}) {
@@ -1672,8 +1779,8 @@ class RegionBuilder {
     auto grow = [&](auto& v) { v.reserve(size_t(double(v.size()) * s)); };
     for (StencilTable& st : out_.level_stencils)
       grow(st.offsets), grow(st.indices), grow(st.weights);
-    grow(out_.gregory_stencils.offsets), grow(out_.gregory_stencils.indices);
-    grow(out_.gregory_stencils.weights);
+    for (StencilTable* g : {&out_.gregory_stencils, &out_.gregory_face_stencils})
+      grow(g->offsets), grow(g->indices), grow(g->weights);
     grow(out_.regular_points), grow(out_.regular_params);
     grow(out_.gregory_points), grow(out_.gregory_params);
   }
@@ -1692,15 +1799,14 @@ class RegionBuilder {
       if (t.regular_params[i].level > 0)
         for (size_t j = 16 * i; j < 16 * i + 16; ++j) t.regular_points[j] += shift;
     }
-    const uint32_t caps = t.level_offsets.back();
-    for (uint32_t& p : t.gregory_points) p += caps;
-    StencilTable& g = t.gregory_stencils;
-    for (size_t r = 0; r < g.size(); ++r) {
-      const uint32_t k = t.gregory_params[r / 20].level;
-      if (k > 0)
-        for (uint32_t j = g.offsets[r]; j < g.offsets[r + 1]; ++j)
-          g.indices[j] += t.level_offsets[k];
+    for (StencilTable* g : {&t.gregory_stencils, &t.gregory_face_stencils}) {
+      const std::vector<uint8_t>& level = g == &t.gregory_stencils ? corner_level_ : face_level_;
+      for (size_t r = 0; r < g->size(); ++r)
+        if (level[r] > 0)
+          for (uint32_t j = g->offsets[r]; j < g->offsets[r + 1]; ++j)
+            if (!(g->indices[j] & kCapRef)) g->indices[j] += t.level_offsets[level[r]];
     }
+    resolve_cap_points(t);
     if (stats) {
       stats->regular_by_level.resize(t.level_offsets.size() - 1, 0);
       stats->gregory_by_level.resize(t.level_offsets.size() - 1, 0);
@@ -1726,6 +1832,7 @@ class RegionBuilder {
   std::vector<uint8_t> hole_, done_;
   std::vector<uint32_t> face_local_, vertex_local_;  // kNone outside the region being cut
   std::vector<uint32_t> count_{0};                   // points per level so far
+  std::vector<uint8_t> corner_level_, face_level_;   // level of each merged end-cap row
   PatchTable out_;
 };
 

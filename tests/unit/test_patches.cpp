@@ -450,6 +450,8 @@ TEST(Patches, RegionBuildsEqualTheWholeCage) {
     EXPECT_EQ(one.gregory_points, many.gregory_points);
     EXPECT_EQ(one.gregory_stencils.indices, many.gregory_stencils.indices);
     EXPECT_EQ(one.gregory_stencils.weights, many.gregory_stencils.weights);
+    EXPECT_EQ(one.gregory_face_stencils.indices, many.gregory_face_stencils.indices);
+    EXPECT_EQ(one.gregory_face_stencils.weights, many.gregory_face_stencils.weights);
     ASSERT_EQ(one.level_stencils.size(), many.level_stencils.size());
     for (size_t k = 0; k < one.level_stencils.size(); ++k) {
       EXPECT_EQ(one.level_stencils[k].offsets, many.level_stencils[k].offsets) << k;

@@ -80,14 +80,17 @@ struct PatchStats {
 };
 
 /// Flat, GPU-ready patch table. Points are numbered globally: the cage's, then each refined
-/// level's points (level_offsets[k] is the first of level k), then the end-cap points. A level
+/// level's points (level_offsets[k] is the first of level k), then the end-cap corner points
+/// (P, Ep, Em: one per corner fan and edge, shared by the end caps meeting there), then the
+/// end-cap face points (Fp, Fm, over corner points and ring points). A level
 /// keeps only the refined points that patches use, directly or through the next level's
 /// stencils (in the refinement's order), so its stencils are no more than drawing needs.
 struct PatchTable {
   SubdivOptions options;
   std::vector<uint32_t> level_offsets;       ///< first point of each level; back() = end-cap base
   std::vector<StencilTable> level_stencils;  ///< level k-1 local points -> level k local points
-  StencilTable gregory_stencils;             ///< global points -> end-cap points
+  StencilTable gregory_stencils;             ///< refined points -> end-cap corner points
+  StencilTable gregory_face_stencils;        ///< refined and corner points -> face points
   std::vector<uint32_t> regular_points;      ///< 16 per regular patch, row-major (4 v + u)
   std::vector<uint32_t> gregory_points;      ///< 20 per end cap (corner i: P, Ep, Em, Fp, Fm)
   std::vector<PatchParam> regular_params, gregory_params;
@@ -95,12 +98,18 @@ struct PatchTable {
   std::vector<uint32_t> ptex_of_face;  ///< first ptex face of each cage face (size faces + 1)
   bool selection = false;              ///< made by select_patches: its points are the hierarchy's
 
-  size_t point_count() const { return level_offsets.back() + gregory_stencils.size(); }
+  size_t point_count() const {
+    return level_offsets.back() + gregory_stencils.size() + gregory_face_stencils.size();
+  }
   size_t patch_count() const { return regular_params.size() + gregory_params.size(); }
   /// Every point (3 floats each) from the cage positions: refinement level by level, then the
   /// end-cap points. O(stencil entries). Throws InputError for a selection (use its
   /// hierarchy's table).
   std::vector<float> points(std::span<const float> cage_positions) const;
+  /// The same into `out` (3 * point_count() floats), for callers that recompute the points
+  /// every frame: no allocation, and no fresh pages to fault in (on the 800k-quad dense torus,
+  /// 15M points, the fresh vector's page faults and zero fill cost as much as the stencils).
+  void points(std::span<const float> cage_positions, std::span<float> out) const;
 };
 
 /// Builds the patch table. vertex_depth (empty, or one entry per cage vertex, each 0-16) gives
