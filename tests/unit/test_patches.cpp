@@ -293,6 +293,45 @@ TEST(Patches, GridsEqualLookups) {
   EXPECT_THROW(evaluate_grids(t, std::vector<float>(3), 2, out.data()), InputError);
 }
 
+// End caps meeting at a corner share its limit point, and those on either side of a patch edge
+// share its edge point (one row each, not one per end cap): on a cube at depth 2 the three end
+// caps around each valence-3 vertex. points() into a buffer equals the returned points.
+TEST(Patches, EndCapsShareCornerPoints) {
+  const Mesh cube = make_shape("cube");
+  PatchOptions o;
+  o.depth = 2;
+  const PatchTable t = build_patches(cube, o);
+  const size_t caps = t.gregory_params.size();
+  ASSERT_EQ(caps, 24u);
+  std::map<uint32_t, int> uses;  // P id -> end caps using it
+  for (size_t c = 0; c < caps; ++c)
+    for (int i = 0; i < 4; ++i) ++uses[t.gregory_points[20 * c + 5 * size_t(i)]];
+  int shared_by_three = 0;
+  for (const auto& [id, n] : uses) shared_by_three += n == 3;
+  EXPECT_EQ(shared_by_three, 8);  // the cube's corners
+  int edges = 0;
+  for (size_t a = 0; a < caps; ++a)
+    for (size_t b = 0; b < caps; ++b)
+      for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) {
+          const uint32_t* pa = &t.gregory_points[20 * a];
+          const uint32_t* pb = &t.gregory_points[20 * b];
+          // a's edge from corner i to i + 1 is b's edge from corner j to j - 1.
+          if (a == b || pa[5 * i] != pb[5 * j] || pa[5 * ((i + 1) & 3)] != pb[5 * ((j + 3) & 3)])
+            continue;
+          EXPECT_EQ(pa[5 * i + 1], pb[5 * j + 2]) << a << " " << b;
+          ++edges;
+        }
+  EXPECT_GE(edges, 24);  // the three patch edges at each cube corner, from both sides
+  EXPECT_LT(t.gregory_stencils.size(), 12 * caps);
+  const std::vector<float> pts = t.points(cube.positions);
+  std::vector<float> into(pts.size(), -1.0f);
+  t.points(cube.positions, into);
+  EXPECT_EQ(pts, into);
+  std::vector<float> short_buffer(pts.size() - 3);
+  EXPECT_THROW(t.points(cube.positions, short_buffer), InputError);
+}
+
 // End-cap derivatives are exact: central differences of positions agree.
 TEST(Patches, DerivativesMatchFiniteDifferences) {
   const Mesh cage = make_shape("cube");
