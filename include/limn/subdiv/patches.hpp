@@ -108,7 +108,7 @@ struct PatchTable {
   std::vector<float> points(std::span<const float> cage_positions) const;
   /// The same into `out` (3 * point_count() floats), for callers that recompute the points
   /// every frame: no allocation, and no fresh pages to fault in (on the 800k-quad dense torus,
-  /// 15M points, the fresh vector's page faults and zero fill cost as much as the stencils).
+  /// 15M points, the fresh vector's page faults and zero fill cost several times the stencils).
   void points(std::span<const float> cage_positions, std::span<float> out) const;
 };
 
