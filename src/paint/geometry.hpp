@@ -1,10 +1,12 @@
 // Small geometric kernels the paint layer shares: box-triangle overlap, closest point on a
-// triangle, Morton codes. Internal header.
+// triangle; Morton codes from limn/mesh/morton.hpp. Internal header.
 #pragma once
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+
+#include "limn/mesh/morton.hpp"
 
 namespace limn::paint_detail {
 
@@ -175,17 +177,6 @@ inline V3 closest_on_triangle(V3 p, V3 a, V3 b, V3 c) {
   return a + (vb / den) * ab + (vc / den) * ac;
 }
 
-// Spreads the low 16 bits of x to every third bit.
-inline uint64_t spread3(uint32_t x) {
-  uint64_t v = x & 0xffffu;
-  v = (v | v << 16) & 0x0000ff0000ffull;
-  v = (v | v << 8) & 0x00f00f00f00full;
-  v = (v | v << 4) & 0x0c30c30c30c3ull;
-  v = (v | v << 2) & 0x249249249249ull;
-  return v;
-}
-inline uint64_t morton3(uint32_t x, uint32_t y, uint32_t z) {
-  return spread3(x) | spread3(y) << 1 | spread3(z) << 2;
-}
+using limn::morton3;
 
 }  // namespace limn::paint_detail

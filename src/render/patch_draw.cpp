@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "gl_util.hpp"
+#include "limn/mesh/morton.hpp"
 #include "limn/mesh/topology.hpp"
 #include "limn/render/draw.hpp"
 #include "limn/subdiv/tessellate.hpp"
@@ -329,14 +330,13 @@ void face_balls(const Mesh& cage, RateScratch& scratch) {
   const Box box = bounding_box(cage);
   std::vector<std::pair<uint32_t, uint32_t>> code(nf);
   for (size_t f = 0; f < nf; ++f) {
-    uint32_t m = 0;
+    uint32_t q[3];
     for (int k = 0; k < 3; ++k) {
       const float ext = box.max[k] - box.min[k];
       const float t = ext > 0 ? (scratch.ball[4 * f + size_t(k)] - box.min[k]) / ext : 0.0f;
-      const uint32_t q = uint32_t(std::clamp(t, 0.0f, 1.0f) * 1023.0f);
-      for (int bit = 0; bit < 10; ++bit) m |= (q >> bit & 1u) << (3 * bit + k);
+      q[k] = uint32_t(std::clamp(t, 0.0f, 1.0f) * 1023.0f);
     }
-    code[f] = {m, uint32_t(f)};
+    code[f] = {uint32_t(morton3(q[0], q[1], q[2])), uint32_t(f)};
   }
   std::sort(code.begin(), code.end());
   scratch.order.resize(nf);
