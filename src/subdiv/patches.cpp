@@ -1760,8 +1760,8 @@ class RegionBuilder {
       }
       dst.weights.insert(dst.weights.end(), src.weights.begin(), src.weights.end());
     };
-    append(g, dg, &corner_level_[corner_shift]);
-    append(gf, dgf, &face_level_[face_shift]);
+    append(g, dg, corner_level_.data() + corner_shift);  // data(): the arrays may be empty
+    append(gf, dgf, face_level_.data() + face_shift);
     if (stats) {
       for (auto [to, from] : {std::pair{&stats->regular_by_level, &ps.regular_by_level},
                               std::pair{&stats->gregory_by_level, &ps.gregory_by_level}}) {
