@@ -117,17 +117,6 @@ std::vector<std::string> split(const char* s) {
   return out;
 }
 
-float diagonal(const limn::Mesh& m) {
-  float lo[3], hi[3];
-  for (int a = 0; a < 3; ++a)
-    lo[a] = std::numeric_limits<float>::max(), hi[a] = std::numeric_limits<float>::lowest();
-  for (size_t v = 0; v < m.vertex_count(); ++v)
-    for (int a = 0; a < 3; ++a)
-      lo[a] = std::min(lo[a], m.positions[3 * v + a]),
-      hi[a] = std::max(hi[a], m.positions[3 * v + a]);
-  return std::hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
-}
-
 // How one side's positions compare with limn's grid: the largest distance over live points,
 // live points it left unwritten (NaN), and dead points (holes) it wrote.
 struct Agreement {
@@ -192,7 +181,7 @@ int main(int argc, char** argv) {
   for (const std::string& spec : specs) {
     const Model model = load_model(spec, shared);
     const limn::Mesh& cage = model.cage;
-    const float diag = diagonal(cage);
+    const float diag = limn::bounding_box(cage).diagonal();
     std::vector<float> uv;
     for (int j = 0; j < grid; ++j)
       for (int i = 0; i < grid; ++i)

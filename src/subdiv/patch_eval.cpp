@@ -143,14 +143,16 @@ void eval_regular(const uint32_t* cv, const PatchParam& pp, double s, double t, 
   for (int c = 0; c < 3; ++c) e.p[c] = p[c], e.du[c] = pu[c], e.dv[c] = pv[c];
 }
 
+// A Gregory patch's boundary Bezier slots (x, y) and the point each takes (corner * 5 + P/Ep/Em);
+// the four interior slots blend Fp and Fm (eval_gregory, block_gregory_avx2).
+constexpr int kGregoryBoundarySlot[12][3] = {{0, 0, 0},  {1, 0, 1},  {2, 0, 7},  {3, 0, 5},
+                                             {0, 1, 2},  {3, 1, 6},  {0, 2, 16}, {3, 2, 12},
+                                             {0, 3, 15}, {1, 3, 17}, {2, 3, 11}, {3, 3, 10}};
+
 void eval_gregory(const uint32_t* cv, double s, double t, const float* pts, Eval& e) {
   double wu[4], du[4], wv[4], dv[4];
   bezier(s, wu, du), bezier(t, wv, dv);
-  // Bezier slot (x, y) -> Gregory point (corner * 5 + P/Ep/Em); interior slots blend Fp, Fm.
-  static constexpr int kBoundarySlot[12][3] = {{0, 0, 0},  {1, 0, 1},  {2, 0, 7},  {3, 0, 5},
-                                               {0, 1, 2},  {3, 1, 6},  {0, 2, 16}, {3, 2, 12},
-                                               {0, 3, 15}, {1, 3, 17}, {2, 3, 11}, {3, 3, 10}};
-  for (const auto& b : kBoundarySlot) {
+  for (const auto& b : kGregoryBoundarySlot) {
     const int x = b[0], y = b[1];
     e.add(pts + 3 * size_t(cv[b[2]]), wu[x] * wv[y], du[x] * wv[y], wu[x] * dv[y]);
   }
@@ -331,10 +333,7 @@ __attribute__((target("avx2,fma"))) void block_gregory_avx2(const uint32_t* cv, 
   __m256 p[3], pu[3], pv[3];
   for (int c = 0; c < 3; ++c) p[c] = pu[c] = pv[c] = zero;
 
-  static constexpr int kBoundarySlot[12][3] = {{0, 0, 0},  {1, 0, 1},  {2, 0, 7},  {3, 0, 5},
-                                               {0, 1, 2},  {3, 1, 6},  {0, 2, 16}, {3, 2, 12},
-                                               {0, 3, 15}, {1, 3, 17}, {2, 3, 11}, {3, 3, 10}};
-  for (const auto& b : kBoundarySlot) {
+  for (const auto& b : kGregoryBoundarySlot) {
     const int x = b[0], y = b[1];
     weigh_avx2(pts + 3 * size_t(cv[b[2]]), o3, _mm256_mul_ps(wu[x], wv[y]),
                _mm256_mul_ps(du[x], wv[y]), _mm256_mul_ps(wu[x], dv[y]), p, pu, pv);
