@@ -159,6 +159,59 @@ TEST(PaintFilter, PointsJustOffThePaintKeepItsColour) {
   }
 }
 
+// A coherent path (rows of points a fraction of a leaf apart) is what the sampler's brick table
+// serves: bricks are unpacked and their taps read from there, while a fresh sampler per point
+// reads every tap from the pool. Both must give the same results to the bit, on two sheets a
+// fraction of a leaf apart (two-sided cells, each side painted its own way), seen from both
+// sides, over mixed depths; and both equal the brute-force map.
+TEST(PaintFilter, CoherentPathsEqualFreshSamplersAndTheMap) {
+  const double leaf = 2.04 / 256.0, gap = 0.3 * leaf;
+  const Mesh m = test::merge({test::sheet(-1, 1, -1, 1, gap, 30, true),
+                              test::sheet(-1, 1, -1, 1, 0.0, 30, false),
+                              test::sheet(0.9, 1, 0.9, 1, 0.5, 1, true)});
+  const PaintSurface surface(m);
+  OctreeTexture t = OctreeTexture::create(surface, pack_rgba8(40, 80, 120, 255));
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u01(0, 1);
+  for (int i = 0; i < 24; ++i) {
+    Brush b;
+    b.depth = 7 + i % 3;
+    b.radius = 0.08f + 0.12f * u01(rng);
+    b.hardness = u01(rng);
+    for (float& c : b.color) c = u01(rng);
+    StrokePainter p(t, surface);
+    p.begin(b);
+    const bool top = i % 2 == 0;  // A from above, B from below
+    const float at[3] = {0.6f * u01(rng) - 0.3f, 0.6f * u01(rng) - 0.3f,
+                         top ? float(gap) + 0.002f : -0.002f};
+    p.dab_world(at);
+    p.end();
+  }
+  ASSERT_GT(t.stats().double_cells, 1000u) << "the sheets should share cells";
+  const test::CellMap map(t);
+  const float up[3] = {0, 0, 1}, down[3] = {0, 0, -1};
+  size_t found = 0, total = 0;
+  for (int sheet = 0; sheet < 2; ++sheet)
+    for (const float* n : {up, down}) {
+      OctreeSampler path(t);
+      const float z = sheet ? 0.0f : float(gap);
+      const float step = float(0.37 * leaf);
+      for (float y = -0.3f; y < 0.3f; y += 7 * step)
+        for (float x = -0.3f; x < 0.3f; x += step) {
+          const float p[3] = {x, y, z};
+          float got[4], fresh[4], ref[4] = {0, 0, 0, 0};
+          const bool hg = path.filtered(p, n, 0.0f, got);
+          OctreeSampler one(t);
+          ASSERT_EQ(one.filtered(p, n, 0.0f, fresh), hg) << x << "," << y << "," << z;
+          for (int k = 0; k < 4; ++k) ASSERT_EQ(got[k], fresh[k]) << x << "," << y << " " << k;
+          ASSERT_EQ(map.filtered(p, n, ref), hg) << x << "," << y << "," << z;
+          for (int k = 0; k < 4 && hg; ++k) ASSERT_NEAR(got[k], ref[k], 2e-4) << k;
+          found += hg, ++total;
+        }
+    }
+  EXPECT_GT(found, total / 3);  // both sides seen, some from behind
+}
+
 // The brute-force map agrees on mixed depths (its filter resolves at the finest leaf its taps
 // find, as the sampler's does), and so does the GPU.
 TEST(PaintFilter, MixedDepthsEqualTheMapAndTheGpu) {

@@ -36,8 +36,8 @@ class OctreeIndex {
 
 /// Lookups with a cache of the last node reached, so coherent points (neighbours, a Morton
 /// order, the 8 taps of a filtered lookup) resume there instead of walking from the root. One
-/// sampler per thread; the texture must not change while a sampler reads it (call `reset` after
-/// a change).
+/// sampler per thread (it holds ~40 KB, zeroed when made: keep it for many lookups); the
+/// texture must not change while a sampler reads it (call `reset` after a change).
 class OctreeSampler {
  public:
   /// `index` (may be null): an OctreeIndex of the same texture, for random access.
@@ -90,20 +90,36 @@ class OctreeSampler {
     bool brick = false;
     uint32_t ptr = 0, info = 0, x = 0, y = 0, z = 0;
   };
-  /// A brick a filtered lookup read its taps from, by its cell (ptr: the brick word).
-  struct BrickSlot {
-    int level = -1;
-    uint32_t ptr = 0, x = 0, y = 0, z = 0;
-  };
   struct Cache {
     /// The last four nodes reached, most recent first: the 8 taps of a filtered lookup
     /// straddle up to a few bricks, and one slot would thrash between them.
     CacheSlot slot[4];
-    /// Bricks by the low two bits of their cell's coordinates: the up to 8 bricks a filtered
+    /// The brick table: bricks a filtered lookup read its taps from, in 64 slots by the low two
+    /// bits of their cell's coordinates (slot x | y << 2 | z << 4): the up to 8 bricks one
     /// lookup's taps straddle, and their neighbours along a coherent path, without evicting
-    /// each other (four slots keep one brick in two a lookup needs in Morton order).
-    BrickSlot brick[64];
-    int brick_level = -1;  ///< the level of the last brick put in `brick`
+    /// each other (four slots keep one brick in two a lookup needs in Morton order). Bricks
+    /// used again are kept unpacked, a byte and two samples per cell (37 KB in all), so a tap
+    /// costs two reads instead of mask ranks, a tag nibble and a sample offset, and a coherent
+    /// path unpacks a brick once for the ~10 lookups it makes there. Entry e of a cell = slot *
+    /// 64 + the cell's Morton index in the brick (as in its mask).
+    static constexpr int kSlotBits = 2;  ///< bits of each coordinate naming a slot
+    static constexpr int kSlots = 1 << (3 * kSlotBits);
+    /// The brick cell's level and coordinates (0: none), bit 62 set once the brick is unpacked:
+    /// on its second use, or its first along a coherent path (see `table_hits`), so random
+    /// lookups, which use a brick once, do not pay for it.
+    uint64_t brick_key[kSlots] = {};
+    uint64_t brick_mask[kSlots] = {};  ///< the brick's occupancy mask
+    uint32_t brick_word[kSlots] = {};  ///< its brick word (block address and double flag)
+    /// Per entry: the cell's tag in bits 0-3, bit 4 when it has a front sample, bit 5 a back
+    /// one (0 for an empty cell).
+    uint8_t brick_cell[kSlots * 64] = {};
+    /// Per entry e: at 2e the front sample, at 2e + 1 the back one (or the front again).
+    Rgba8 brick_color[kSlots * 64 * 2] = {};
+    int brick_level = -1;  ///< the level of the last brick put in the table
+    /// How often recent lookups found all their taps' bricks in the table (a moving average,
+    /// 0-256): above half, a brick is unpacked on its first use, since the lookups that follow
+    /// will read it again.
+    uint32_t table_hits = 0;
     /// The general node the last walk into a brick came through: its other bricks are one
     /// step away when a coherent path leaves the cached ones.
     CacheSlot parent;
