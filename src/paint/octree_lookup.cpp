@@ -219,9 +219,18 @@ const UnitTable kUnit;
 
 // Where brick cell bits (v & 3 along axis k) land in the brick's Morton index: bit 1 picks the
 // cell at the brick's level + 1 (mask byte), bit 0 the cell inside it.
-inline uint32_t brick_bits(uint32_t v, int k) {
+constexpr uint32_t brick_bits(uint32_t v, int k) {
   return (v >> 1 & 1u) << (3 + k) | (v & 1u) << k;
 }
+// brick_bits(v, k) by [k][v].
+struct BrickBits {
+  uint32_t v[3][4];
+  constexpr BrickBits() : v{} {
+    for (int k = 0; k < 3; ++k)
+      for (uint32_t i = 0; i < 4; ++i) v[k][i] = brick_bits(i, k);
+  }
+};
+constexpr BrickBits kBrickBits;
 
 // The brick table's key of a brick cell: 16 bits per coordinate (a brick's level is at most
 // kMaxDepth - 2), the level above them and bit 63, so no key is the empty slot's 0.
@@ -334,8 +343,8 @@ LIMN_WALK uint32_t slot_taps(const Cache& cache, uint32_t slot, const uint32_t m
 // lane does one tap's float operations in the same order (w in double, then float(w), its
 // alpha as float(a) / 255, fw * a * channel / 255), and the sums run in corner order, so the
 // results are those of the scalar loop to the bit.
-LIMN_FAST_TARGET inline bool accumulate8_avx(const double wt[3][2], uint32_t found,
-                                             const Rgba8 col[8], float acc[5]) {
+LIMN_FAST_TARGET inline bool accumulate8_avx(const double wt[3][2], uint32_t found, __m256i c,
+                                             float acc[5]) {
   const __m256d w01 = _mm256_mul_pd(_mm256_setr_pd(wt[0][0], wt[0][1], wt[0][0], wt[0][1]),
                                     _mm256_setr_pd(wt[1][0], wt[1][0], wt[1][1], wt[1][1]));
   const __m256d w_lo = _mm256_mul_pd(w01, _mm256_set1_pd(wt[2][0]));
@@ -350,7 +359,6 @@ LIMN_FAST_TARGET inline bool accumulate8_avx(const double wt[3][2], uint32_t fou
   // float(w) where the tap counts, +0 elsewhere (w >= 0).
   const __m256 fw = _mm256_and_ps(_mm256_set_m128(_mm256_cvtpd_ps(w_hi), _mm256_cvtpd_ps(w_lo)),
                                   _mm256_castsi256_ps(on));
-  const __m256i c = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(col));
   const __m256i byte = _mm256_set1_epi32(255);
   const __m256 k255 = _mm256_set1_ps(255.0f);
   const __m256 wa =
@@ -384,6 +392,59 @@ LIMN_FAST_TARGET inline bool accumulate8_avx(const double wt[3][2], uint32_t fou
   for (int corner = 0; corner < 8; ++corner) weight += w[corner];
   acc[4] = weight;
   return taps != 0;
+}
+
+LIMN_FAST_TARGET inline bool accumulate8_avx(const double wt[3][2], uint32_t found,
+                                             const Rgba8 col[8], float acc[5]) {
+  return accumulate8_avx(wt, found, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(col)), acc);
+}
+
+// The fast path of walk_trilinear (below) in AVX2 lanes, a corner a lane: when every tap's
+// brick is unpacked in the brick table (one gather of the 8 slots' keys), the taps are two
+// gathers (cell bytes, then samples) and are accumulated as accumulate8_avx does. entry, keys:
+// per axis and tap cell, the entry bits and key bits of walk_trilinear; lk: the level's key
+// bits with kUnpacked. Returns -1 (nothing done) when a brick is not there, else whether any
+// tap has a sample.
+LIMN_FAST_TARGET inline int table_trilinear_avx(const Cache& cache, const uint32_t entry[3][2],
+                                                const uint64_t keys[3][2], uint64_t lk,
+                                                uint32_t back, const double wt[3][2],
+                                                float acc[5]) {
+  // Corner c = x | y << 1 | z << 2 in lane c: x picks odd lanes, y lanes 2-3 and 6-7, z 4-7.
+  const __m256i x0 = _mm256_set1_epi32(int(entry[0][0])), x1 = _mm256_set1_epi32(int(entry[0][1]));
+  const __m256i y0 = _mm256_set1_epi32(int(entry[1][0])), y1 = _mm256_set1_epi32(int(entry[1][1]));
+  const __m256i z0 = _mm256_set1_epi32(int(entry[2][0])), z1 = _mm256_set1_epi32(int(entry[2][1]));
+  const __m256i e = _mm256_or_si256(
+      _mm256_or_si256(_mm256_blend_epi32(x0, x1, 0xaa), _mm256_blend_epi32(y0, y1, 0xcc)),
+      _mm256_blend_epi32(z0, z1, 0xf0));
+  // The keys of corners 0-3 and 4-7, a 64-bit lane each.
+  const __m256i kxy =
+      _mm256_or_si256(_mm256_blend_epi32(_mm256_set1_epi64x(int64_t(keys[0][0])),
+                                         _mm256_set1_epi64x(int64_t(keys[0][1])), 0xcc),
+                      _mm256_blend_epi32(_mm256_set1_epi64x(int64_t(keys[1][0])),
+                                         _mm256_set1_epi64x(int64_t(keys[1][1])), 0xf0));
+  const __m256i want_lo = _mm256_or_si256(kxy, _mm256_set1_epi64x(int64_t(lk | keys[2][0])));
+  const __m256i want_hi = _mm256_or_si256(kxy, _mm256_set1_epi64x(int64_t(lk | keys[2][1])));
+  const __m256i slot = _mm256_srli_epi32(e, 6);
+  const auto* key = reinterpret_cast<const long long*>(cache.brick_key);
+  const __m256i have_lo = _mm256_i32gather_epi64(key, _mm256_castsi256_si128(slot), 8);
+  const __m256i have_hi = _mm256_i32gather_epi64(key, _mm256_extracti128_si256(slot, 1), 8);
+  const __m256i same =
+      _mm256_and_si256(_mm256_cmpeq_epi64(have_lo, want_lo), _mm256_cmpeq_epi64(have_hi, want_hi));
+  if (_mm256_movemask_epi8(same) != -1) return -1;
+  const __m256i one = _mm256_set1_epi32(1);
+  const __m256i cell =
+      _mm256_and_si256(_mm256_i32gather_epi32(reinterpret_cast<const int*>(cache.brick_cell), e, 1),
+                       _mm256_set1_epi32(255));
+  const __m256i side =
+      _mm256_and_si256(_mm256_srlv_epi32(_mm256_set1_epi32(int(back)),
+                                         _mm256_and_si256(cell, _mm256_set1_epi32(15))),
+                       one);
+  const __m256i col = _mm256_i32gather_epi32(reinterpret_cast<const int*>(cache.brick_color),
+                                             _mm256_add_epi32(_mm256_add_epi32(e, e), side), 4);
+  const __m256i has = _mm256_srlv_epi32(cell, _mm256_add_epi32(side, _mm256_set1_epi32(4)));
+  const uint32_t found =
+      uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_slli_epi32(has, 31))));
+  return accumulate8_avx(wt, found, col, acc);
 }
 
 // The 8 leaf-level taps of a filtered lookup, accumulated premultiplied (acc: rgb, alpha,
@@ -431,24 +492,16 @@ LIMN_WALK bool walk_trilinear(const uint32_t* pool, const OctreeIndex* index, Ca
   if (level < 2) {
     for (int corner = 0; corner < 8; ++corner) walk_tap(corner);
   } else {
-    // Per axis, the corners on each side of a brick boundary (all 8 on one side when the two
-    // tap cells share the brick's 4 cells along it).
     const uint32_t back = back_tags(n);
-    static constexpr uint32_t kSide[3][2] = {{0x55, 0xaa}, {0x33, 0xcc}, {0x0f, 0xf0}};
-    uint32_t sets[3][2], mb[3][2];
-    int parts[3];
-    // Per axis, each tap cell's brick cell: its key bits, and its slot's bits in a brick table
-    // entry with the cell's own Morton bits.
+    // Per axis, each tap cell's Morton bits in its brick, its brick cell's key bits, and its
+    // slot's bits in a brick table entry with the cell's own Morton bits.
+    uint32_t mb[3][2], entry[3][2];
     uint64_t keys[3][2];
-    uint32_t entry[3][2];
     bool inside = true;
     for (int k = 0; k < 3; ++k) {
-      const bool split = (i0[k] & 3) == 3;
-      parts[k] = split ? 2 : 1;
-      sets[k][0] = split ? kSide[k][0] : 0xffu, sets[k][1] = kSide[k][1];
       for (int d = 0; d < 2; ++d) {
-        mb[k][d] = brick_bits(uint32_t(i0[k] + d) & 3u, k);
-        const int64_t b = (i0[k] + d) >> 2;
+        const int64_t i = i0[k] + d, b = i >> 2;
+        mb[k][d] = kBrickBits.v[k][i & 3];
         keys[k][d] = uint64_t(b) << (32 - 16 * k);
         entry[k][d] = uint32_t(b & kSlotMask) << (6 + kSlotBits * k) | mb[k][d];
       }
@@ -457,7 +510,16 @@ LIMN_WALK bool walk_trilinear(const uint32_t* pool, const OctreeIndex* index, Ca
     // A coherent path mostly finds every tap's brick in the table: then the taps are read
     // there in corner order, with no walk and no loop over blocks.
     bool all = inside;
-    if (inside) {
+    if constexpr (kAvx) {
+      if (inside) {
+        const uint64_t lk = brick_key(level - 2, 0, 0, 0) | kUnpacked;
+        const int r = table_trilinear_avx(cache, entry, keys, lk, back, wt, acc);
+        // A moving average over about 8 lookups, 0-256.
+        cache.table_hits = cache.table_hits - (cache.table_hits >> 3) + (r >= 0 ? 32u : 0u);
+        if (r >= 0) return r;
+        all = false;
+      }
+    } else if (inside) {
       const uint64_t lk = brick_key(level - 2, 0, 0, 0) | kUnpacked;
       uint32_t e[8];
 #pragma GCC unroll 8
@@ -473,6 +535,16 @@ LIMN_WALK bool walk_trilinear(const uint32_t* pool, const OctreeIndex* index, Ca
         for (int corner = 0; corner < 8; ++corner)
           found |= entry_tap(cache, e[corner], back, col[corner]) << corner;
       }
+    }
+    // Per axis, the corners on each side of a brick boundary (all 8 on one side when the two
+    // tap cells share the brick's 4 cells along it).
+    static constexpr uint32_t kSide[3][2] = {{0x55, 0xaa}, {0x33, 0xcc}, {0x0f, 0xf0}};
+    uint32_t sets[3][2];
+    int parts[3];
+    for (int k = 0; k < 3; ++k) {
+      const bool split = (i0[k] & 3) == 3;
+      parts[k] = split ? 2 : 1;
+      sets[k][0] = split ? kSide[k][0] : 0xffu, sets[k][1] = kSide[k][1];
     }
     for (int ez = 0; ez < (all ? 0 : parts[2]); ++ez)
       for (int ey = 0; ey < parts[1]; ++ey)
@@ -872,19 +944,26 @@ bool OctreeSampler::filtered(const float p[3], const float* n, float footprint, 
   return true;
 }
 
-void OctreeSampler::prefetch_group(const float* p, size_t count) {
-  uint32_t xyz[3 * 16];
-  size_t m = 0;
+bool OctreeSampler::prefetch_group(const float* p, size_t count, bool prefetch) {
+  uint32_t xyz[3 * 16] = {};
+  size_t m = 0, near = 0;
+  uint32_t last[3] = {0, 0, 0};
   for (size_t i = 0; i < count; ++i) {
     bool inside = true;
+    uint32_t c[3];
     for (int k = 0; k < 3; ++k) {
       const double u = (double(p[3 * i + size_t(k)]) - origin_[k]) * scale_;
       inside = inside && u >= 0.0 && u < double(1u << kD);
-      xyz[3 * m + size_t(k)] = inside ? uint32_t(u) : 0;
+      c[k] = inside ? uint32_t(u) : 0;
     }
-    m += inside;
+    if (!inside) continue;
+    // Neighbours: in the same level-8 cell as the point before.
+    near += m > 0 && ((c[0] ^ last[0]) | (c[1] ^ last[1]) | (c[2] ^ last[2])) >> (kD - 8) == 0;
+    for (int k = 0; k < 3; ++k) xyz[3 * m + size_t(k)] = last[k] = c[k];
+    ++m;
   }
-  prefetch_coords(xyz, m);
+  if (prefetch) prefetch_coords(xyz, m);
+  return m > 1 && 4 * near >= 3 * (m - 1);
 }
 
 void OctreeSampler::prefetch_coords(const uint32_t* xyz, size_t count) {
@@ -952,9 +1031,11 @@ void OctreeSampler::prefetch_coords(const uint32_t* xyz, size_t count) {
 
 void OctreeSampler::nearest_batch(const float* p, const float* n, size_t count, Rgba8* out,
                                   uint8_t* found) {
+  // Points that follow a path hit the cache: prefetching their walks only costs the walks.
+  bool coherent = false;
   for (size_t g = 0; g < count; g += 16) {
     const size_t m = std::min<size_t>(16, count - g);
-    prefetch_group(p + 3 * g, m);
+    coherent = prefetch_group(p + 3 * g, m, !coherent);
     for (size_t i = g; i < g + m; ++i) {
       const bool f = nearest(p + 3 * i, n ? n + 3 * i : nullptr, out[i]);
       if (found) found[i] = f;
@@ -964,9 +1045,11 @@ void OctreeSampler::nearest_batch(const float* p, const float* n, size_t count, 
 
 void OctreeSampler::filtered_batch(const float* p, const float* n, size_t count, float footprint,
                                    float* rgba, uint8_t* found) {
+  // Points that follow a path hit the cache: prefetching their walks only costs the walks.
+  bool coherent = false;
   for (size_t g = 0; g < count; g += 16) {
     const size_t m = std::min<size_t>(16, count - g);
-    prefetch_group(p + 3 * g, m);
+    coherent = prefetch_group(p + 3 * g, m, !coherent);
     for (size_t i = g; i < g + m; ++i) {
       const bool f = filtered(p + 3 * i, n ? n + 3 * i : nullptr, footprint, rgba + 4 * i);
       if (found) found[i] = f;

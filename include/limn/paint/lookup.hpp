@@ -72,6 +72,8 @@ class OctreeSampler {
   /// 3 floats per point; n may be null). Points go in groups of 16 whose walks first descend in
   /// lockstep issuing prefetches for each level's nodes, so the memory latency of 16 random
   /// walks overlaps instead of adding up; then each point is looked up as usual, from cache.
+  /// After a group that follows a path (most points in the cell of the one before), the next
+  /// skips the prefetching: the cache holds its nodes, and walks would only cost time.
   /// `found` (may be null) receives 1/0 per point. Same results as one call per point.
   void nearest_batch(const float* p, const float* n, size_t count, Rgba8* out,
                      uint8_t* found = nullptr);
@@ -111,8 +113,8 @@ class OctreeSampler {
     uint64_t brick_mask[kSlots] = {};  ///< the brick's occupancy mask
     uint32_t brick_word[kSlots] = {};  ///< its brick word (block address and double flag)
     /// Per entry: the cell's tag in bits 0-3, bit 4 when it has a front sample, bit 5 a back
-    /// one (0 for an empty cell).
-    uint8_t brick_cell[kSlots * 64] = {};
+    /// one (0 for an empty cell); 3 bytes more, so every entry can be read as 4 bytes.
+    uint8_t brick_cell[kSlots * 64 + 3] = {};
     /// Per entry e: at 2e the front sample, at 2e + 1 the back one (or the front again).
     Rgba8 brick_color[kSlots * 64 * 2] = {};
     int brick_level = -1;  ///< the level of the last brick put in the table
@@ -126,7 +128,9 @@ class OctreeSampler {
   };
 
  private:
-  void prefetch_group(const float* p, size_t count);
+  /// Prefetches the walks of up to 16 points (when `prefetch`); returns whether they follow a
+  /// path (most of them beside the point before).
+  bool prefetch_group(const float* p, size_t count, bool prefetch);
   void prefetch_coords(const uint32_t* xyz, size_t count);
   bool trilinear(const double u[3], int level, const float* n, bool averages, float acc[5]);
 
