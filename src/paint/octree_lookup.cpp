@@ -33,6 +33,9 @@ inline int side_of(uint32_t tag, const float* n) {
   return d[0] * n[0] + d[1] * n[1] + d[2] * n[2] >= 0 ? 0 : 1;
 }
 
+// The instruction set of the walk's fast variant (see LIMN_WALK below).
+#define LIMN_FAST_TARGET __attribute__((target("popcnt,sse4.1,sse4.2,bmi,bmi2,lzcnt,avx,avx2")))
+
 using F4 = float __attribute__((vector_size(16)));
 using U4 = uint32_t __attribute__((vector_size(16)));
 using I4 = int32_t __attribute__((vector_size(16)));
@@ -59,6 +62,25 @@ inline uint32_t back_tags(const float* n) {
   return back & ~1u;  // tag 0: no direction, seen from everywhere
 }
 
+// back_tags with the 16 tags in two AVX vectors (the same float operations, lane by lane).
+LIMN_FAST_TARGET inline uint32_t back_tags_avx(const float* n) {
+  if (!n) return 0;
+  uint32_t back = 0;
+  for (int h = 0; h < 2; ++h) {
+    const float* d0 = &kTagLanes.d[0][2 * h][0];
+    const float* d1 = &kTagLanes.d[1][2 * h][0];
+    const float* d2 = &kTagLanes.d[2][2 * h][0];
+    const __m256 dot =
+        _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_loadu_ps(d0), _mm256_set1_ps(n[0])),
+                                    _mm256_mul_ps(_mm256_loadu_ps(d1), _mm256_set1_ps(n[1]))),
+                      _mm256_mul_ps(_mm256_loadu_ps(d2), _mm256_set1_ps(n[2])));
+    // !(dot >= 0): also for a NaN, as back_tags.
+    back |= uint32_t(_mm256_movemask_ps(_mm256_cmp_ps(dot, _mm256_setzero_ps(), _CMP_NGE_UQ)))
+            << (8 * h);
+  }
+  return back & ~1u;
+}
+
 inline uint32_t octant(uint32_t x, uint32_t y, uint32_t z, int shift) {
   return (x >> shift & 1u) | (y >> shift & 1u) << 1 | (z >> shift & 1u) << 2;
 }
@@ -79,7 +101,6 @@ Rgba8 premul_mean(const uint32_t* s, size_t count) {
 // per lookup than plain x86-64; without popcnt GCC calls a library routine for each of a dozen
 // popcounts), and for any x86-64 otherwise. No FMA: sums round as on any machine.
 #define LIMN_WALK __attribute__((always_inline)) inline
-#define LIMN_FAST_TARGET __attribute__((target("popcnt,sse4.1,sse4.2,bmi,bmi2,lzcnt,avx,avx2")))
 
 using Cache = OctreeSampler::Cache;
 
@@ -492,7 +513,11 @@ LIMN_WALK bool walk_trilinear(const uint32_t* pool, const OctreeIndex* index, Ca
   if (level < 2) {
     for (int corner = 0; corner < 8; ++corner) walk_tap(corner);
   } else {
-    const uint32_t back = back_tags(n);
+    uint32_t back;
+    if constexpr (kAvx)
+      back = back_tags_avx(n);
+    else
+      back = back_tags(n);
     // Per axis, each tap cell's Morton bits in its brick, its brick cell's key bits, and its
     // slot's bits in a brick table entry with the cell's own Morton bits.
     uint32_t mb[3][2], entry[3][2];
