@@ -45,6 +45,28 @@ struct DabOnSheet {
   }
 };
 
+// `count` dabs of random colour and hardness, radius r0 + r1 * (0-1), depth d0 + i % depths,
+// at the point `at(i, u, v, p)` writes for two more random numbers u, v in [0, 1).
+template <class At>
+void random_dabs(OctreeTexture& t, const PaintSurface& surface, std::mt19937& rng, int count,
+                 int d0, int depths, float r0, float r1, At at) {
+  std::uniform_real_distribution<float> u01(0, 1);
+  for (int i = 0; i < count; ++i) {
+    Brush b;
+    b.depth = d0 + i % depths;
+    b.radius = r0 + r1 * u01(rng);
+    b.hardness = u01(rng);
+    for (float& c : b.color) c = u01(rng);
+    StrokePainter p(t, surface);
+    p.begin(b);
+    float where[3];
+    const float u = u01(rng), v = u01(rng);
+    at(i, u, v, where);
+    p.dab_world(where);
+    p.end();
+  }
+}
+
 TEST(PaintFilter, CoarseLeavesBesideFinePaintStayTheirOwnColour) {
   const DabOnSheet d;
   const double cells = (0.0 - d.tex.origin()[2]) / d.tex.size() * 32.0;
@@ -172,21 +194,10 @@ TEST(PaintFilter, CoherentPathsEqualFreshSamplersAndTheMap) {
   const PaintSurface surface(m);
   OctreeTexture t = OctreeTexture::create(surface, pack_rgba8(40, 80, 120, 255));
   std::mt19937 rng(11);
-  std::uniform_real_distribution<float> u01(0, 1);
-  for (int i = 0; i < 24; ++i) {
-    Brush b;
-    b.depth = 7 + i % 3;
-    b.radius = 0.08f + 0.12f * u01(rng);
-    b.hardness = u01(rng);
-    for (float& c : b.color) c = u01(rng);
-    StrokePainter p(t, surface);
-    p.begin(b);
-    const bool top = i % 2 == 0;  // A from above, B from below
-    const float at[3] = {0.6f * u01(rng) - 0.3f, 0.6f * u01(rng) - 0.3f,
-                         top ? float(gap) + 0.002f : -0.002f};
-    p.dab_world(at);
-    p.end();
-  }
+  random_dabs(t, surface, rng, 24, 7, 3, 0.08f, 0.12f, [&](int i, float u, float v, float at[3]) {
+    at[0] = 0.6f * u - 0.3f, at[1] = 0.6f * v - 0.3f;
+    at[2] = i % 2 == 0 ? float(gap) + 0.002f : -0.002f;  // A from above, B from below
+  });
   ASSERT_GT(t.stats().double_cells, 1000u) << "the sheets should share cells";
   const test::CellMap map(t);
   const float up[3] = {0, 0, 1}, down[3] = {0, 0, -1};
@@ -219,19 +230,10 @@ TEST(PaintFilter, MixedDepthsEqualTheMapAndTheGpu) {
   const PaintSurface surface(m);
   OctreeTexture t = OctreeTexture::create(surface, pack_rgba8(40, 80, 120, 255));
   std::mt19937 rng(7);
+  random_dabs(t, surface, rng, 40, 5, 5, 0.05f, 0.15f, [](int, float u, float v, float at[3]) {
+    at[0] = 2 * u - 1, at[1] = 2 * v - 1, at[2] = 0;
+  });
   std::uniform_real_distribution<float> u01(0, 1);
-  for (int i = 0; i < 40; ++i) {
-    Brush b;
-    b.depth = 5 + i % 5;
-    b.radius = 0.05f + 0.15f * u01(rng);
-    b.hardness = u01(rng);
-    for (float& c : b.color) c = u01(rng);
-    StrokePainter p(t, surface);
-    p.begin(b);
-    const float at[3] = {2 * u01(rng) - 1, 2 * u01(rng) - 1, 0};
-    p.dab_world(at);
-    p.end();
-  }
   const test::CellMap map(t);
   OctreeSampler s(t);
   std::vector<float> pts, nrm;
