@@ -1091,7 +1091,34 @@ void Builder::emit(size_t k, const SparseLevel& S) {
       if (h_)
         h_->node_patch[node_of[f]] = regular ? uint32_t(out.regular_params.size())
                                              : kPatchGregory | uint32_t(out.gregory_params.size());
-      if (regular) {
+      bool plain4 = regular && !crease;
+      for (int i = 0; i < 4 && plain4; ++i) plain4 = plain_interior(L, R, a[i]);
+      if (plain4) {
+        // The common case: four plain interior corners, so no boundary, no phantom point, and
+        // each corner's three other faces are reached through the twins from the patch face.
+        // Points are put as the general case below puts them (same values, same order).
+        const uint32_t* fv = R.face_vertices.data();
+        uint32_t grid[16];
+        for (int i = 0; i < 4; ++i) {
+          const uint32_t c1 = t.corner_twin[t.corner_prev[corner[i]]];
+          const uint32_t c2 = t.corner_twin[t.corner_prev[c1]];
+          const uint32_t c3 = t.corner_twin[t.corner_prev[c2]];
+          const int x = kPos[i][0], y = kPos[i][1];
+          const int* d1 = kD1[i];
+          const int* d2 = kD2[i];
+          auto put = [&](int px, int py, uint32_t p) { grid[4 * py + px] = off + p; };
+          put(x, y, a[i]);
+          put(x - d1[0], y - d1[1], fv[t.corner_next[c2]]);
+          put(x - d2[0], y - d2[1], fv[t.corner_next[c3]]);
+          put(x - d1[0] - d2[0], y - d1[1] - d2[1], fv[t.corner_next[t.corner_next[c2]]]);
+          put(x + d2[0] - d1[0], y + d2[1] - d1[1], fv[t.corner_next[t.corner_next[c1]]]);
+          put(x + d1[0] - d2[0], y + d1[1] - d2[1], fv[t.corner_next[t.corner_next[c3]]]);
+        }
+        pp.type = PatchType::regular;
+        out.regular_points.insert(out.regular_points.end(), grid, grid + 16);
+        out.regular_params.push_back(pp);
+        if (stats) ++stats->regular_by_level[k];
+      } else if (regular) {
         RingView rings[4];
         Ring* spans = spans_;
         int in_ring[4];

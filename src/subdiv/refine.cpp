@@ -771,9 +771,10 @@ void for_stencil_chunks(const SubdivOptions& o, const RefinedLevel& P, const Adj
 
 // All the child points' stencils as one table. Large levels take two parallel passes (sizes,
 // then entries in place): computing each stencil twice costs less than holding (and first
-// touching) the table twice.
+// touching) the table twice. With `keep`, only points i with keep[i] get their stencil; the
+// others get empty rows.
 StencilTable build_stencils(const SubdivOptions& o, const RefinedLevel& P, const Adj& a,
-                            const Selection& sel) {
+                            const Selection& sel, const uint8_t* keep = nullptr) {
   const size_t n = sel.points();
   StencilTable out;
   if (n < 4 * kStencilChunk) {  // small: one serial pass, writing in place
@@ -785,6 +786,10 @@ StencilTable build_stencils(const SubdivOptions& o, const RefinedLevel& P, const
     size_t used = 0;
     Rules rules(o, P, a, sel);
     for (size_t i = 0; i < n; ++i) {
+      if (keep && !keep[i]) {
+        out.offsets[i + 1] = uint32_t(used);
+        continue;
+      }
       const size_t k = rules.compute(i);
       if (used + k > out.indices.size()) {
         const size_t size = std::max(used + k, out.indices.size() + kStep);
@@ -804,7 +809,7 @@ StencilTable build_stencils(const SubdivOptions& o, const RefinedLevel& P, const
   refill(sizes, n, 0u);
   parallel_range(n, kStencilChunk, [&](size_t b, size_t e) {
     Rules rules(o, P, a, sel);
-    for (size_t i = b; i < e; ++i) sizes[i] = uint32_t(rules.compute(i));
+    for (size_t i = b; i < e; ++i) sizes[i] = keep && !keep[i] ? 0 : uint32_t(rules.compute(i));
   });
   size_t total = 0;
   for (size_t i = 0; i < n; ++i) {
@@ -819,6 +824,7 @@ StencilTable build_stencils(const SubdivOptions& o, const RefinedLevel& P, const
   parallel_range(n, kStencilChunk, [&](size_t b, size_t e) {
     Rules rules(o, P, a, sel);
     for (size_t i = b; i < e; ++i) {
+      if (keep && !keep[i]) continue;
       rules.compute(i);
       rules.write(out.indices.data() + out.offsets[i], out.weights.data() + out.offsets[i]);
     }
@@ -1422,6 +1428,13 @@ SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& optio
   }
   auto adj = std::make_unique<Adj>(cage_level(cage, options, r.levels[0].level));
   std::vector<uint8_t> requested;
+  // Lean runs build level k's stencils after level k's request, only for the points that what
+  // the caller takes from level k (the children of the faces requested at level k - 1) or level
+  // k + 1's stencils can read: on isolation levels about 40% of the points only complete other
+  // points' rings. Until then level k - 1 keeps its adjacency and selection.
+  std::unique_ptr<Adj> padj;
+  Selection psel;
+  std::vector<uint8_t> prev_requested, keep;
 
   for (size_t k = 0;; ++k) {
     SparseLevel& P = r.levels[k];
@@ -1437,7 +1450,6 @@ SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& optio
     requested.assign(nf, 0);
     const LevelAdjacency view{t.corner_edge, t.eco, t.ec, t.vco, t.vc};
     request(k, P, view, requested);
-    if (!keep_levels && k > 0) r.levels[k - 1] = SparseLevel{};
     for (uint32_t f = 0; f < nf; ++f) {
       if (!requested[f]) continue;
       any = true;
@@ -1445,15 +1457,36 @@ SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& optio
         near[PL.face_vertices[c]] = 1;
     }
     P.face_refined.assign(nf, 0);
+    for (uint32_t v = 0; v < nv && any; ++v)
+      if (near[v])
+        for (uint32_t i = t.vco[v]; i < t.vco[v + 1]; ++i) P.face_refined[t.face_of(t.vc[i])] = 1;
+    if (!keep_levels && k > 0) {
+      // Bit 1: a vertex of a face the caller may take or that is refined; bit 2: on a face
+      // around such a vertex (the ring a patch or a child stencil reads).
+      keep.assign(nv, 0);
+      for (uint32_t f = 0; f < nf; ++f)
+        if (prev_requested[P.face_parent[f]] || P.face_refined[f])
+          for (uint32_t c = PL.face_offsets[f]; c < PL.face_offsets[f + 1]; ++c)
+            keep[PL.face_vertices[c]] = 1;
+      const uint32_t* fv = PL.face_vertices.data();
+      for (uint32_t f = 0; f < nf; ++f) {  // refined levels are all quads
+        const uint32_t* q = fv + 4 * size_t(f);
+        if ((keep[q[0]] | keep[q[1]] | keep[q[2]] | keep[q[3]]) & 1)
+          keep[q[0]] |= 2, keep[q[1]] |= 2, keep[q[2]] |= 2, keep[q[3]] |= 2;
+      }
+      for (uint8_t& x : keep) x >>= 1;
+      r.stencils.push_back(
+          build_stencils(options, r.levels[k - 1].level, *padj, psel, keep.data()));
+      r.levels[k - 1] = SparseLevel{};
+      padj.reset();
+      psel = Selection{};
+    }
     if (!any) {
       if (!keep_levels) r.levels[k] = SparseLevel{};
       break;
     }
     if (k == kMaxSparseDepth)
       throw InputError(fmt::format("sparse refinement: requests beyond level {}", kMaxSparseDepth));
-    for (uint32_t v = 0; v < nv; ++v)
-      if (near[v])
-        for (uint32_t i = t.vco[v]; i < t.vco[v + 1]; ++i) P.face_refined[t.face_of(t.vc[i])] = 1;
 
     Selection sel;
     sel.all = false;
@@ -1483,7 +1516,7 @@ SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& optio
     sel.nv = uint32_t(sel.vertices.size());
 
     SparseLevel C;
-    r.stencils.push_back(build_stencils(options, PL, t, sel));
+    if (keep_levels) r.stencils.push_back(build_stencils(options, PL, t, sel));
     selected_child_faces(PL, t, sel, C.level);
     child_vertex_sharpness(PL, sel, C.level);
     auto cadj = std::make_unique<Adj>(sparse_child_adj(PL, t, sel, C.level));
@@ -1518,9 +1551,17 @@ SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& optio
         C.face_depth.push_back(P.face_depth[f] > 0 ? uint8_t(P.face_depth[f] - 1) : 0);
       }
     }
-    C.parent_faces = std::move(sel.faces);
-    C.parent_edges = std::move(sel.edges);
-    C.parent_vertices = std::move(sel.vertices);
+    if (keep_levels) {
+      C.parent_faces = std::move(sel.faces);
+      C.parent_edges = std::move(sel.edges);
+      C.parent_vertices = std::move(sel.vertices);
+    } else {
+      C.parent_faces = sel.faces, C.parent_edges = sel.edges, C.parent_vertices = sel.vertices;
+      sel.edge_slot = {}, sel.vertex_slot = {};
+      psel = std::move(sel);
+      padj = std::move(adj);
+      prev_requested.swap(requested);
+    }
     r.levels.push_back(std::move(C));
     adj = std::move(cadj);
   }

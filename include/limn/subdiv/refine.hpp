@@ -173,7 +173,10 @@ using SparseRequest =
 /// level's own topology and sharpness). SparseLevel::vertex_depth and face_depth stay 0.
 /// keep_levels = false: a caller that builds what it needs inside `request` (patch tables) gets
 /// only the stencils back; level k-1 is dropped once the request for level k has returned, so
-/// at most two levels' topology live at a time.
+/// at most two levels' topology live at a time. Its level-k stencils then have rows only for the
+/// points within one ring of the children of the faces requested at level k-1 or of the faces
+/// refined from level k (what such a caller and the next level's stencils can read); the other
+/// rows are empty.
 SparseRefinement refine_sparse(const Mesh& cage, const SubdivOptions& options,
                                const SparseRequest& request, bool keep_levels = true);
 
