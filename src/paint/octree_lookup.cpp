@@ -336,6 +336,15 @@ LIMN_WALK uint32_t pool_taps(const uint32_t* pool, uint32_t word, const uint32_t
   return found;
 }
 
+// Cache::table_hits: a moving average over about 8 lookups of whether all their taps' bricks
+// were in the table, 0-256; above half the lookups follow a coherent path.
+LIMN_WALK void count_table_hit(Cache& cache, bool hit) {
+  cache.table_hits = cache.table_hits - (cache.table_hits >> 3) + (hit ? 32u : 0u);
+}
+LIMN_WALK bool coherent(const Cache& cache) {
+  return cache.table_hits > 128;
+}
+
 // Resolves one tap from entry e of the brick table: its sample facing the lookup's normal
 // (`back`: see back_tags) into `col`; returns 1 when there is one. Branch-free: whether a
 // tap's cell is occupied is as good as random on a surface.
@@ -535,30 +544,27 @@ LIMN_WALK bool walk_trilinear(const uint32_t* pool, const OctreeIndex* index, Ca
     // A coherent path mostly finds every tap's brick in the table: then the taps are read
     // there in corner order, with no walk and no loop over blocks.
     bool all = inside;
-    if constexpr (kAvx) {
-      if (inside) {
-        const uint64_t lk = brick_key(level - 2, 0, 0, 0) | kUnpacked;
-        const int r = table_trilinear_avx(cache, entry, keys, lk, back, wt, acc);
-        // A moving average over about 8 lookups, 0-256.
-        cache.table_hits = cache.table_hits - (cache.table_hits >> 3) + (r >= 0 ? 32u : 0u);
-        if (r >= 0) return r;
-        all = false;
-      }
-    } else if (inside) {
+    if (inside) {
       const uint64_t lk = brick_key(level - 2, 0, 0, 0) | kUnpacked;
-      uint32_t e[8];
+      if constexpr (kAvx) {
+        const int r = table_trilinear_avx(cache, entry, keys, lk, back, wt, acc);
+        all = r >= 0;
+        count_table_hit(cache, all);
+        if (all) return r;
+      } else {
+        uint32_t e[8];
 #pragma GCC unroll 8
-      for (int corner = 0; corner < 8; ++corner) {
-        const int cx = corner & 1, cy = corner >> 1 & 1, cz = corner >> 2;
-        e[corner] = entry[0][cx] | entry[1][cy] | entry[2][cz];
-        all &= cache.brick_key[e[corner] >> 6] == (lk | keys[0][cx] | keys[1][cy] | keys[2][cz]);
-      }
-      // A moving average over about 8 lookups, 0-256.
-      cache.table_hits = cache.table_hits - (cache.table_hits >> 3) + (all ? 32u : 0u);
-      if (all) {
+        for (int corner = 0; corner < 8; ++corner) {
+          const int cx = corner & 1, cy = corner >> 1 & 1, cz = corner >> 2;
+          e[corner] = entry[0][cx] | entry[1][cy] | entry[2][cz];
+          all &= cache.brick_key[e[corner] >> 6] == (lk | keys[0][cx] | keys[1][cy] | keys[2][cz]);
+        }
+        count_table_hit(cache, all);
+        if (all) {
 #pragma GCC unroll 8
-        for (int corner = 0; corner < 8; ++corner)
-          found |= entry_tap(cache, e[corner], back, col[corner]) << corner;
+          for (int corner = 0; corner < 8; ++corner)
+            found |= entry_tap(cache, e[corner], back, col[corner]) << corner;
+        }
       }
     }
     // Per axis, the corners on each side of a brick boundary (all 8 on one side when the two
@@ -599,7 +605,7 @@ LIMN_WALK bool walk_trilinear(const uint32_t* pool, const OctreeIndex* index, Ca
                 int64_t(s0.z) == bz) {
               remember_brick(pool, s0.ptr, cache, slot, key);
               cache.brick_level = s0.level;
-              if (cache.table_hits > 128) {  // a coherent path: the next lookups will read it too
+              if (coherent(cache)) {  // the next lookups will read it too
                 unpack_brick(pool, cache, slot);
                 found |= slot_taps(cache, slot, mb, set, back, col);
               } else {
