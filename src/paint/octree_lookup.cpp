@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdlib>
 
+#include <cpuid.h>
 #include <immintrin.h>
 
 namespace limn {
@@ -67,9 +68,9 @@ LIMN_FAST_TARGET inline uint32_t back_tags_avx(const float* n) {
   if (!n) return 0;
   uint32_t back = 0;
   for (int h = 0; h < 2; ++h) {
-    const float* d0 = &kTagLanes.d[0][2 * h][0];
-    const float* d1 = &kTagLanes.d[1][2 * h][0];
-    const float* d2 = &kTagLanes.d[2][2 * h][0];
+    const auto* d0 = reinterpret_cast<const float*>(&kTagLanes.d[0][2 * h]);
+    const auto* d1 = reinterpret_cast<const float*>(&kTagLanes.d[1][2 * h]);
+    const auto* d2 = reinterpret_cast<const float*>(&kTagLanes.d[2][2 * h]);
     const __m256 dot =
         _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_loadu_ps(d0), _mm256_set1_ps(n[0])),
                                     _mm256_mul_ps(_mm256_loadu_ps(d1), _mm256_set1_ps(n[1]))),
@@ -735,10 +736,16 @@ bool walk_nearest_generic(const uint32_t* pool, const OctreeIndex* index, Cache&
   return walk_nearest(pool, index, cache, x, y, z, n, out, level);
 }
 
+// LZCNT (ABM) is CPUID 0x80000001 ECX bit 5; clang's __builtin_cpu_supports has no name for it.
+bool has_lzcnt() {
+  unsigned a = 0, b = 0, c = 0, d = 0;
+  return __get_cpuid(0x80000001u, &a, &b, &c, &d) && (c >> 5 & 1u);
+}
+
 // LIMN_NO_SIMD=1 in the environment takes the plain walk anywhere (its tests).
 const bool kFast = __builtin_cpu_supports("popcnt") && __builtin_cpu_supports("avx2") &&
-                   __builtin_cpu_supports("bmi") && __builtin_cpu_supports("bmi2") &&
-                   __builtin_cpu_supports("lzcnt") && !std::getenv("LIMN_NO_SIMD");
+                   __builtin_cpu_supports("bmi") && __builtin_cpu_supports("bmi2") && has_lzcnt() &&
+                   !std::getenv("LIMN_NO_SIMD");
 
 }  // namespace
 
