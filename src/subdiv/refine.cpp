@@ -60,9 +60,9 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
 
 // Sizes a vector to n elements of `value`, dropping any old buffer first so a level's arrays
 // never hold two copies at once.
-template <class T>
-void refill(std::vector<T>& v, size_t n, T value = T()) {
-  if (v.capacity() < n) std::vector<T>().swap(v);
+template <class T, class A>
+void refill(std::vector<T, A>& v, size_t n, T value = T()) {
+  if (v.capacity() < n) std::vector<T, A>().swap(v);
   v.assign(n, value);
 }
 
@@ -188,13 +188,36 @@ struct Terms {
 
 // Adjacency of one level as flat CSR arrays. On quad levels (every level after the first, and
 // all-quad cages) corners are implicit: corner i of face f is 4f + i.
+// Allocates like std::allocator but leaves elements made by resize() uninitialised: the
+// adjacency arrays are written in full right after they are sized, so zero-filling them first
+// only costs a pass over each.
+template <class T>
+struct NoInit : std::allocator<T> {
+  template <class U>
+  struct rebind {
+    using other = NoInit<U>;
+  };
+  NoInit() = default;
+  template <class U>
+  NoInit(const NoInit<U>&) noexcept {}
+  template <class U>
+  void construct(U* p) noexcept {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <class U, class... A>
+  void construct(U* p, A&&... a) {
+    ::new (static_cast<void*>(p)) U(std::forward<A>(a)...);
+  }
+};
+using Ids = std::vector<uint32_t, NoInit<uint32_t>>;
+
 struct Adj {
   bool quads = false;
-  std::vector<uint32_t> corner_face;         // per corner; empty on quad levels
-  std::vector<uint32_t> corner_edge;         // per corner: the edge of its outgoing half-edge
-  std::vector<uint32_t> eco{0}, ec;          // edge -> the corners on it (one per face)
-  std::vector<uint32_t> vco{0}, vc;          // vertex -> the corners at it (one per face)
-  std::vector<uint32_t> veo{0}, ve;          // vertex -> its edges
+  Ids corner_face;                           // per corner; empty on quad levels
+  Ids corner_edge;                           // per corner: the edge of its outgoing half-edge
+  Ids eco{0}, ec;                            // edge -> the corners on it (one per face)
+  Ids vco{0}, vc;                            // vertex -> the corners at it (one per face)
+  Ids veo{0}, ve;                            // vertex -> its edges
   std::vector<uint8_t> edge_non_manifold;    // from build_adj only (the cage)
   std::vector<uint8_t> vertex_non_manifold;  // faces around it are not one fan (build_adj)
 
@@ -865,11 +888,15 @@ void table_edge_sharpness(const SubdivOptions& o, const RefinedLevel& P, const A
   const size_t ne = C.edge_vertices.size() / 2;
   C.edge_sharpness.assign(ne, 0.0f);
   std::vector<float> pe, ce;
-  for (size_t e = 0; e < ne; ++e) {
-    const uint32_t a = C.edge_vertices[2 * e], b = C.edge_vertices[2 * e + 1];  // a < b
-    if (!(a < F + E && a >= F && b >= F + E)) continue;
-    C.edge_sharpness[e] =
-        half_sharpness_at(o, P, pa, sel.edge(a - F), sel.vertex(b - F - E), pe, ce);
+  // Only the halves of parent edges (edge point to vertex point: sparse_child_adj numbers them
+  // first, two per selected parent edge) can be sharp.
+  for (uint32_t ei = 0; ei < E; ++ei) {
+    if (!sharp(P.edge_sharpness[sel.edge(ei)])) continue;
+    for (size_t e = 2 * size_t(ei); e < 2 * size_t(ei) + 2; ++e) {
+      const uint32_t b = C.edge_vertices[2 * e + 1];
+      C.edge_sharpness[e] =
+          half_sharpness_at(o, P, pa, sel.edge(ei), sel.vertex(b - F - E), pe, ce);
+    }
   }
 }
 
@@ -878,17 +905,29 @@ void selected_child_faces(const RefinedLevel& P, const Adj& pa, const Selection&
                           RefinedLevel& C) {
   const LevelRef pl{P, pa};
   const uint32_t F = sel.nf, E = sel.ne;
-  C.face_offsets.assign(1, 0);
-  C.face_vertices.clear();
-  C.face_hole.clear();
+  size_t Q = 0;
   for (uint32_t fi = 0; fi < F; ++fi) {
     const uint32_t f = sel.face(fi);
-    for (uint32_t c = P.face_offsets[f]; c < P.face_offsets[f + 1]; ++c) {
-      C.face_vertices.insert(C.face_vertices.end(), {F + E + sel.vslot(P.face_vertices[c]),
-                                                     F + sel.eslot(pa.corner_edge[c]), fi,
-                                                     F + sel.eslot(pa.corner_edge[pl.prev(c)])});
-      C.face_offsets.push_back(static_cast<uint32_t>(C.face_vertices.size()));
-      C.face_hole.push_back(P.face_hole[f]);
+    Q += P.face_offsets[f + 1] - P.face_offsets[f];
+  }
+  // Sized once and written in place: the arrays are most of a level.
+  C.face_offsets.resize(Q + 1);
+  C.face_vertices.resize(4 * Q);
+  C.face_hole.resize(Q);
+  uint32_t* fo = C.face_offsets.data();
+  uint32_t* fv = C.face_vertices.data();
+  uint8_t* hole = C.face_hole.data();
+  size_t q = 0;
+  fo[0] = 0;
+  for (uint32_t fi = 0; fi < F; ++fi) {
+    const uint32_t f = sel.face(fi);
+    for (uint32_t c = P.face_offsets[f]; c < P.face_offsets[f + 1]; ++c, ++q) {
+      fv[4 * q] = F + E + sel.vslot(P.face_vertices[c]);
+      fv[4 * q + 1] = F + sel.eslot(pa.corner_edge[c]);
+      fv[4 * q + 2] = fi;
+      fv[4 * q + 3] = F + sel.eslot(pa.corner_edge[pl.prev(c)]);
+      fo[q + 1] = uint32_t(4 * (q + 1));
+      hole[q] = P.face_hole[f];
     }
   }
 }
@@ -920,7 +959,7 @@ Adj sparse_child_adj(const RefinedLevel& P, const Adj& pa, const Selection& sel,
   };
   const uint32_t ne = 2 * E + Q;
   C.edge_vertices.resize(2 * size_t(ne));
-  a.corner_edge.assign(4 * size_t(Q), kNone);
+  a.corner_edge.resize(4 * size_t(Q));  // every corner is put below
   a.eco.assign(size_t(ne) + 1, 0);
   // Corners per edge: each type-A edge has two; type-B edges one per selected face on the
   // parent edge.
@@ -1475,8 +1514,13 @@ SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& optio
           keep[q[0]] |= 2, keep[q[1]] |= 2, keep[q[2]] |= 2, keep[q[3]] |= 2;
       }
       for (uint8_t& x : keep) x >>= 1;
+      // Level k holds the selection's lists (as its parent_*): lent to psel, not copied.
+      psel.faces.swap(P.parent_faces), psel.edges.swap(P.parent_edges);
+      psel.vertices.swap(P.parent_vertices);
       r.stencils.push_back(
           build_stencils(options, r.levels[k - 1].level, *padj, psel, keep.data()));
+      psel.faces.swap(P.parent_faces), psel.edges.swap(P.parent_edges);
+      psel.vertices.swap(P.parent_vertices);
       r.levels[k - 1] = SparseLevel{};
       padj.reset();
       psel = Selection{};
@@ -1544,19 +1588,18 @@ SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& optio
       C.vertex_complete[cv] = whole;
       C.vertex_depth[cv] = P.vertex_depth[v] > 0 ? uint8_t(P.vertex_depth[v] - 1) : 0;
     }
-    for (uint32_t f : sel.faces) {
+    C.face_parent.resize(C.level.face_count());
+    C.face_depth.resize(C.level.face_count());
+    for (size_t q = 0; const uint32_t f : sel.faces) {
       const uint32_t n = PL.face_offsets[f + 1] - PL.face_offsets[f];
-      for (uint32_t i = 0; i < n; ++i) {
-        C.face_parent.push_back(f);
-        C.face_depth.push_back(P.face_depth[f] > 0 ? uint8_t(P.face_depth[f] - 1) : 0);
-      }
+      const uint8_t d = P.face_depth[f] > 0 ? uint8_t(P.face_depth[f] - 1) : 0;
+      for (uint32_t i = 0; i < n; ++i, ++q) C.face_parent[q] = f, C.face_depth[q] = d;
     }
-    if (keep_levels) {
-      C.parent_faces = std::move(sel.faces);
-      C.parent_edges = std::move(sel.edges);
-      C.parent_vertices = std::move(sel.vertices);
-    } else {
-      C.parent_faces = sel.faces, C.parent_edges = sel.edges, C.parent_vertices = sel.vertices;
+    C.parent_faces = std::move(sel.faces);
+    C.parent_edges = std::move(sel.edges);
+    C.parent_vertices = std::move(sel.vertices);
+    if (!keep_levels) {
+      sel.faces = {}, sel.edges = {}, sel.vertices = {};
       sel.edge_slot = {}, sel.vertex_slot = {};
       psel = std::move(sel);
       padj = std::move(adj);
