@@ -804,7 +804,9 @@ StencilTable build_stencils(const SubdivOptions& o, const RefinedLevel& P, const
     // Room reserved for the usual 4-9 terms a point (only address space: pages are touched as
     // the size grows in small steps just ahead of the writes), and no per-stencil append.
     out.offsets.resize(n + 1);
-    out.indices.reserve(7 * n + 64), out.weights.reserve(7 * n + 64);
+    size_t rows = n;  // with `keep`, the rows that get a stencil
+    if (keep) rows = size_t(std::count_if(keep, keep + n, [](uint8_t x) { return x != 0; }));
+    out.indices.reserve(7 * rows + 64), out.weights.reserve(7 * rows + 64);
     constexpr size_t kStep = 4096;
     size_t used = 0;
     Rules rules(o, P, a, sel);
