@@ -559,6 +559,9 @@ struct Selection {
   uint32_t nf = 0, ne = 0, nv = 0;               // counts (also when all)
   std::vector<uint32_t> faces, edges, vertices;  // when !all
   std::vector<uint32_t> edge_slot, vertex_slot;  // parent edge/vertex -> index in edges/vertices
+  // Sparse levels: the parent vertices whose children are made (`near`): a selected face gets
+  // its child quads at these corners only, and the selected edges and vertices are those at them.
+  const uint8_t* near = nullptr;
   uint32_t face(uint32_t i) const { return all ? i : faces[i]; }
   uint32_t edge(uint32_t i) const { return all ? i : edges[i]; }
   uint32_t vertex(uint32_t i) const { return all ? i : vertices[i]; }
@@ -882,35 +885,55 @@ void derived_edge_sharpness(const SubdivOptions& o, const RefinedLevel& P, const
   });
 }
 
-// Child edge sharpness on a child whose edges come from build_adj (sparse levels): an
-// edge from an edge point to a vertex point is half of the parent edge.
+// Sparse child levels make, of each selected parent face, only the child quads at its `near`
+// corners (sel.near): those are the children whose points a requested face's children see
+// (each child of a requested face, and the ring around each of its vertices), and the other
+// children of the faces around it would be made only to be dropped. Quad at parent corner c
+// (vertex v, near): V(v), E(c's edge), F, E(prev's edge). Child edges: first the halves of the
+// selected parent edges (edge point to the vertex point of a near end; an edge's first end's
+// half first), then one per parent corner whose edge is selected (its edge point to the face
+// point), in parent face and corner order; so every list is the part of what refining the faces
+// whole would give that touches near corners, in the same order.
+struct SparseChildEdges {
+  std::vector<uint32_t> half;  // per selected parent edge: its first half's child edge
+  uint32_t halves = 0;         // type-A edges (halves); type-B edges follow
+};
+
+// The child edge of selected parent edge ei's half at end `end` (which must be near).
+inline uint32_t half_edge(const SparseChildEdges& ce, const RefinedLevel& P, const Selection& sel,
+                          uint32_t ei, uint32_t end) {
+  const uint32_t e = sel.edge(ei), x = P.edge_vertices[2 * size_t(e)];
+  return ce.half[ei] + (end != x && sel.near[x] ? 1u : 0u);
+}
+
+// Child edge sharpness on a sparse child: only the halves of parent edges can be sharp.
 void table_edge_sharpness(const SubdivOptions& o, const RefinedLevel& P, const Adj& pa,
-                          const Selection& sel, RefinedLevel& C) {
-  const uint32_t F = sel.nf, E = sel.ne;
+                          const Selection& sel, const SparseChildEdges& ce, RefinedLevel& C) {
   const size_t ne = C.edge_vertices.size() / 2;
   C.edge_sharpness.assign(ne, 0.0f);
-  std::vector<float> pe, ce;
-  // Only the halves of parent edges (edge point to vertex point: sparse_child_adj numbers them
-  // first, two per selected parent edge) can be sharp.
-  for (uint32_t ei = 0; ei < E; ++ei) {
-    if (!sharp(P.edge_sharpness[sel.edge(ei)])) continue;
-    for (size_t e = 2 * size_t(ei); e < 2 * size_t(ei) + 2; ++e) {
-      const uint32_t b = C.edge_vertices[2 * e + 1];
-      C.edge_sharpness[e] =
-          half_sharpness_at(o, P, pa, sel.edge(ei), sel.vertex(b - F - E), pe, ce);
+  std::vector<float> pe, cs;
+  for (uint32_t ei = 0; ei < sel.ne; ++ei) {
+    const uint32_t e = sel.edge(ei);
+    if (!sharp(P.edge_sharpness[e])) continue;
+    for (int j = 0; j < 2; ++j) {
+      const uint32_t end = P.edge_vertices[2 * size_t(e) + size_t(j)];
+      if (sel.near[end])
+        C.edge_sharpness[half_edge(ce, P, sel, ei, end)] =
+            half_sharpness_at(o, P, pa, e, end, pe, cs);
     }
   }
 }
 
-// Child faces of the selected parent faces (sparse levels).
+// Child faces of the selected parent faces at their near corners (sparse levels).
 void selected_child_faces(const RefinedLevel& P, const Adj& pa, const Selection& sel,
                           RefinedLevel& C) {
   const LevelRef pl{P, pa};
   const uint32_t F = sel.nf, E = sel.ne;
+  const uint32_t* pfv = P.face_vertices.data();
   size_t Q = 0;
   for (uint32_t fi = 0; fi < F; ++fi) {
     const uint32_t f = sel.face(fi);
-    Q += P.face_offsets[f + 1] - P.face_offsets[f];
+    for (uint32_t c = P.face_offsets[f]; c < P.face_offsets[f + 1]; ++c) Q += sel.near[pfv[c]];
   }
   // Sized once and written in place: the arrays are most of a level.
   C.face_offsets.resize(Q + 1);
@@ -923,61 +946,87 @@ void selected_child_faces(const RefinedLevel& P, const Adj& pa, const Selection&
   fo[0] = 0;
   for (uint32_t fi = 0; fi < F; ++fi) {
     const uint32_t f = sel.face(fi);
-    for (uint32_t c = P.face_offsets[f]; c < P.face_offsets[f + 1]; ++c, ++q) {
-      fv[4 * q] = F + E + sel.vslot(P.face_vertices[c]);
+    for (uint32_t c = P.face_offsets[f]; c < P.face_offsets[f + 1]; ++c) {
+      if (!sel.near[pfv[c]]) continue;
+      fv[4 * q] = F + E + sel.vslot(pfv[c]);
       fv[4 * q + 1] = F + sel.eslot(pa.corner_edge[c]);
       fv[4 * q + 2] = fi;
       fv[4 * q + 3] = F + sel.eslot(pa.corner_edge[pl.prev(c)]);
       fo[q + 1] = uint32_t(4 * (q + 1));
       hole[q] = P.face_hole[f];
+      ++q;
     }
   }
 }
 
 // The adjacency of a sparse child (faces from selected_child_faces) in closed form, like
-// derive_child's for uniform levels: no search and no sort. Child quad q of parent corner c has
-// corners V(c), E(c's edge), F, E(prev's edge). Its edges: two per selected parent edge ei
-// (2 ei + 0/1: edge point to the vertex point of the edge's first/second end) and one per child
-// quad (2 E + q: the edge point of its corner's edge to the face point). A child edge has one
-// corner per selected parent face that makes it, so an edge whose parent lies on an unrefined
-// face is a boundary of the child level, as build_adj would find. Sets C.edge_vertices.
-Adj sparse_child_adj(const RefinedLevel& P, const Adj& pa, const Selection& sel, RefinedLevel& C) {
+// derive_child's for uniform levels: no search and no sort. A child edge has one corner per
+// child quad that makes it, so an edge whose other side was not made is a boundary of the
+// child level, as build_adj would find. Sets C.edge_vertices; `ce` gets the edge numbering.
+Adj sparse_child_adj(const RefinedLevel& P, const Adj& pa, const Selection& sel, RefinedLevel& C,
+                     SparseChildEdges& ce) {
   const LevelRef pl{P, pa};
   const uint32_t F = sel.nf, E = sel.ne, V = sel.nv;
   const uint32_t Q = uint32_t(C.face_count()), nvc = F + E + V;
   const uint32_t* pfv = P.face_vertices.data();
+  const uint8_t* near = sel.near;
   Adj a;
   a.quads = true;
-  // Parent face -> the first child quad of its selected index.
+  // Parent face -> its first child quad; parent corner -> its quad (kNone: not near).
   std::vector<uint32_t> first_quad(P.face_count(), kNone);
   for (uint32_t fi = 0, q = 0; fi < F; ++fi) {
     const uint32_t f = sel.face(fi);
     first_quad[f] = q;
-    q += P.face_offsets[f + 1] - P.face_offsets[f];
+    for (uint32_t c = P.face_offsets[f]; c < P.face_offsets[f + 1]; ++c) q += near[pfv[c]];
   }
-  auto quad_of = [&](uint32_t c) {  // c a corner of a selected parent face
-    const uint32_t f = pa.face_of(c);
-    return first_quad[f] + (c - P.face_offsets[f]);
-  };
-  const uint32_t ne = 2 * E + Q;
+  // Halves: per selected edge, one per near end.
+  ce.half.resize(E);
+  uint32_t halves = 0;
+  for (uint32_t ei = 0; ei < E; ++ei) {
+    const uint32_t e = sel.edge(ei);
+    ce.half[ei] = halves;
+    halves += near[P.edge_vertices[2 * size_t(e)]] + near[P.edge_vertices[2 * size_t(e) + 1]];
+  }
+  ce.halves = halves;
+  // Type-B edges: parent corners whose edge has a near end.
+  uint32_t spokes = 0;
+  for (uint32_t fi = 0; fi < F; ++fi) {
+    const uint32_t f = sel.face(fi);
+    for (uint32_t c = P.face_offsets[f]; c < P.face_offsets[f + 1]; ++c)
+      spokes += (near[pfv[c]] | near[pfv[pl.next(c)]]) != 0;
+  }
+  const uint32_t ne = halves + spokes;
   C.edge_vertices.resize(2 * size_t(ne));
   a.corner_edge.resize(4 * size_t(Q));  // every corner is put below
   a.eco.assign(size_t(ne) + 1, 0);
-  // Corners per edge: each type-A edge has two; type-B edges one per selected face on the
-  // parent edge.
+  // Corners per half: one per selected face on the parent edge (all of its faces: they are
+  // around the near end).
   for (uint32_t ei = 0; ei < E; ++ei) {
     const uint32_t e = sel.edge(ei);
     uint32_t n = 0;
     for (uint32_t j = pa.eco[e]; j < pa.eco[e + 1]; ++j)
       n += first_quad[pa.face_of(pa.ec[j])] != kNone;
-    a.eco[2 * ei + 1] = a.eco[2 * ei + 2] = n;
-    const uint32_t x = P.edge_vertices[2 * size_t(e)], y = P.edge_vertices[2 * size_t(e) + 1];
-    C.edge_vertices[4 * size_t(ei)] = F + ei,
-                        C.edge_vertices[4 * size_t(ei) + 1] = F + E + sel.vslot(x);
-    C.edge_vertices[4 * size_t(ei) + 2] = F + ei,
-                                     C.edge_vertices[4 * size_t(ei) + 3] = F + E + sel.vslot(y);
+    uint32_t h = ce.half[ei];
+    for (int j = 0; j < 2; ++j) {
+      const uint32_t end = P.edge_vertices[2 * size_t(e) + size_t(j)];
+      if (!near[end]) continue;
+      a.eco[h + 1] = n;
+      C.edge_vertices[2 * size_t(h)] = F + ei,
+                          C.edge_vertices[2 * size_t(h) + 1] = F + E + sel.vslot(end);
+      ++h;
+    }
   }
-  for (uint32_t q = 0; q < Q; ++q) a.eco[2 * size_t(E) + q + 1] = 2;
+  // Spokes: one corner per child quad at either end of the parent corner's edge.
+  {
+    uint32_t s = halves;
+    for (uint32_t fi = 0; fi < F; ++fi) {
+      const uint32_t f = sel.face(fi);
+      for (uint32_t c = P.face_offsets[f]; c < P.face_offsets[f + 1]; ++c) {
+        const uint32_t n = uint32_t(near[pfv[c]]) + near[pfv[pl.next(c)]];
+        if (n) a.eco[++s] = n;
+      }
+    }
+  }
   for (size_t e = 0; e < ne; ++e) a.eco[e + 1] += a.eco[e];
   a.ec.resize(a.eco.back());
   std::vector<uint32_t> fill(a.eco.begin(), a.eco.end() - 1);
@@ -985,19 +1034,25 @@ Adj sparse_child_adj(const RefinedLevel& P, const Adj& pa, const Selection& sel,
     a.corner_edge[corner] = e;
     a.ec[fill[e]++] = corner;
   };
+  uint32_t s = halves;
   for (uint32_t fi = 0; fi < F; ++fi) {
     const uint32_t f = sel.face(fi);
-    for (uint32_t c = P.face_offsets[f]; c < P.face_offsets[f + 1]; ++c) {
-      const uint32_t q = quad_of(c), qn = quad_of(pl.next(c)), ei = sel.eslot(pa.corner_edge[c]);
-      const uint32_t e = 2 * E + q;
+    const uint32_t b = P.face_offsets[f], n = P.face_offsets[f + 1] - b;
+    const uint32_t q0 = first_quad[f];  // the quad of the face's first near corner
+    for (uint32_t i = 0, before = 0; i < n; before += near[pfv[b + i]], ++i) {
+      const uint32_t c = b + i, cn = pl.next(c);
+      const bool has_q = near[pfv[c]], has_qn = near[pfv[cn]];
+      if (!has_q && !has_qn) continue;
+      // Quads of c and of next(c), counted among the face's near corners.
+      const uint32_t q = q0 + before, qn = i + 1 == n ? q0 : q0 + before + has_q;
+      const uint32_t ei = sel.eslot(pa.corner_edge[c]);
+      const uint32_t e = s++;
       C.edge_vertices[2 * size_t(e)] = fi, C.edge_vertices[2 * size_t(e) + 1] = F + ei;
-      put(e, 4 * q + 1);   // E(c) -> F in quad q
-      put(e, 4 * qn + 2);  // F -> E(c) in the next corner's quad
+      if (has_q) put(e, 4 * q + 1);    // E(c) -> F in quad q
+      if (has_qn) put(e, 4 * qn + 2);  // F -> E(c) in the next corner's quad
       // V(start) -> E(c) in quad q, E(c) -> V(end) in quad qn: the halves of the parent edge.
-      const uint32_t pe = pa.corner_edge[c];
-      const bool start_first = P.edge_vertices[2 * size_t(pe)] == pfv[c];
-      put(2 * ei + (start_first ? 0 : 1), 4 * q);
-      put(2 * ei + (start_first ? 1 : 0), 4 * qn + 3);
+      if (has_q) put(half_edge(ce, P, sel, ei, pfv[c]), 4 * q);
+      if (has_qn) put(half_edge(ce, P, sel, ei, pfv[cn]), 4 * qn + 3);
     }
   }
   // Vertex -> corners and vertex -> edges, by counting.
@@ -1538,19 +1593,23 @@ SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& optio
     sel.all = false;
     sel.edge_slot.assign(ne, kNone);
     sel.vertex_slot.assign(nv, kNone);
+    const LevelRef pl{PL, t};
     for (uint32_t f = 0; f < nf; ++f) {
       if (!P.face_refined[f]) continue;
       sel.faces.push_back(f);
       for (uint32_t c = PL.face_offsets[f]; c < PL.face_offsets[f + 1]; ++c) {
         const uint32_t v = PL.face_vertices[c];
+        if (!near[v]) continue;
         // The selection rule guarantees this (see the header); a failure is a bug in limn.
         if (!P.vertex_complete[v])
           throw std::logic_error(fmt::format(
               "sparse refinement: level {} vertex {} is refined without its whole ring", k, v));
         sel.vertex_slot[v] = 0;
         sel.edge_slot[t.corner_edge[c]] = 0;
+        sel.edge_slot[t.corner_edge[pl.prev(c)]] = 0;
       }
     }
+    sel.near = near.data();
     for (uint32_t e = 0; e < ne; ++e)
       if (sel.edge_slot[e] == 0)
         sel.edge_slot[e] = uint32_t(sel.edges.size()), sel.edges.push_back(e);
@@ -1565,21 +1624,27 @@ SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& optio
     if (keep_levels) r.stencils.push_back(build_stencils(options, PL, t, sel));
     selected_child_faces(PL, t, sel, C.level);
     child_vertex_sharpness(PL, sel, C.level);
-    auto cadj = std::make_unique<Adj>(sparse_child_adj(PL, t, sel, C.level));
-    table_edge_sharpness(options, PL, t, sel, C.level);
+    SparseChildEdges child_edges;
+    auto cadj = std::make_unique<Adj>(sparse_child_adj(PL, t, sel, C.level, child_edges));
+    table_edge_sharpness(options, PL, t, sel, child_edges, C.level);
 
     // Provenance, completeness and the depths left.
     const size_t nvc = size_t(sel.nf) + sel.ne + sel.nv;
-    C.vertex_complete.assign(nvc, 1);  // face points: the face's children are all present
+    C.vertex_complete.assign(nvc, 1);
     C.vertex_depth.assign(nvc, 0);
     for (uint32_t i = 0; i < sel.ne; ++i) {
       const uint32_t e = sel.edges[i];
       const uint32_t a = PL.edge_vertices[2 * size_t(e)], b = PL.edge_vertices[2 * size_t(e) + 1];
-      // A complete end vertex has every face of the edge; each must be refined.
-      bool whole = P.vertex_complete[a] || P.vertex_complete[b];
-      for (uint32_t j = t.eco[e]; j < t.eco[e + 1] && whole; ++j)
-        whole = P.face_refined[t.face_of(t.ec[j])];
-      C.vertex_complete[sel.nf + i] = whole;
+      // Its ring is the child quads at both ends of every face on the edge: both ends near
+      // (then every face on it is refined, and the ends are complete).
+      C.vertex_complete[sel.nf + i] = near[a] && near[b];
+    }
+    for (uint32_t i = 0; i < sel.nf; ++i) {  // a face point: the quads at all its corners
+      const uint32_t f = sel.faces[i];
+      bool whole = true;
+      for (uint32_t c = PL.face_offsets[f]; c < PL.face_offsets[f + 1] && whole; ++c)
+        whole = near[PL.face_vertices[c]];
+      C.vertex_complete[i] = whole;
     }
     for (uint32_t i = 0; i < sel.nv; ++i) {
       const uint32_t v = sel.vertices[i];
@@ -1593,14 +1658,15 @@ SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& optio
     C.face_parent.resize(C.level.face_count());
     C.face_depth.resize(C.level.face_count());
     for (size_t q = 0; const uint32_t f : sel.faces) {
-      const uint32_t n = PL.face_offsets[f + 1] - PL.face_offsets[f];
       const uint8_t d = P.face_depth[f] > 0 ? uint8_t(P.face_depth[f] - 1) : 0;
-      for (uint32_t i = 0; i < n; ++i, ++q) C.face_parent[q] = f, C.face_depth[q] = d;
+      for (uint32_t c = PL.face_offsets[f]; c < PL.face_offsets[f + 1]; ++c)
+        if (near[PL.face_vertices[c]]) C.face_parent[q] = f, C.face_depth[q] = d, ++q;
     }
     C.parent_faces = std::move(sel.faces);
     C.parent_edges = std::move(sel.edges);
     C.parent_vertices = std::move(sel.vertices);
     if (!keep_levels) {
+      sel.near = nullptr;  // `near` is this level's
       sel.faces = {}, sel.edges = {}, sel.vertices = {};
       sel.edge_slot = {}, sel.vertex_slot = {};
       psel = std::move(sel);

@@ -120,7 +120,7 @@ struct SparseLevel {
                                          ///< vertex is present (its ring is whole)
   std::vector<uint8_t> vertex_depth;     ///< per vertex: levels still to refine around it
   std::vector<uint8_t> face_depth;       ///< per face: levels still to refine inside it
-  std::vector<uint8_t> face_refined;     ///< per face: 1 when the next level refines it
+  std::vector<uint8_t> face_refined;     ///< per face: 1 when the next level has children of it
 };
 
 /// Sparse (feature-adaptive) refinement: levels[0] is the cage, stencils[k-1] computes level k's
@@ -142,11 +142,12 @@ struct SparseRefinement {
 /// - face_depth[f] = d: every descendant of face f down to level d is present, with complete
 ///   vertices.
 /// Either span may be empty (no requests of that kind); otherwise it has one entry per cage
-/// vertex / face. At level k the faces refined are the requested ones (faces with a vertex or
-/// face depth left) plus every face sharing a vertex with them, which keeps every child point
-/// exact and every child of a requested face whole; so the work per requested vertex is
-/// O(valence^2) per level and linear in depth, not 4^depth. Throws InputError for bad spans or
-/// cages limn cannot subdivide.
+/// vertex / face. At level k the requested faces (faces with a vertex or face depth left) are
+/// refined whole, and every face sharing a vertex with them gets its children at those shared
+/// vertices only (OpenSubdiv's sparse rule): that keeps every child point exact and every child
+/// of a requested face whole; so the work per requested vertex is O(valence^2) per level and
+/// linear in depth, not 4^depth. SparseLevel::face_refined marks both kinds. Throws InputError for
+/// bad spans or cages limn cannot subdivide.
 SparseRefinement refine_sparse(const Mesh& cage, std::span<const uint8_t> vertex_depth,
                                std::span<const uint8_t> face_depth, const SubdivOptions& options);
 
@@ -161,7 +162,9 @@ struct LevelAdjacency {
 /// Decides which faces of a sparse level to refine: called once per level (0 = the cage) with
 /// the level built so far and its adjacency; sets requested[f] = 1 (requested arrives sized to
 /// the level's faces, all 0) for each face to refine. Faces sharing a vertex with a requested
-/// face are refined too, so each requested face's children have complete vertices. No request
+/// face get their children at the shared vertices, so each requested face's children have
+/// complete vertices; a requested face must have complete vertices itself (a child of a
+/// requested face, or a face of the cage). No request
 /// ends the refinement; requests past level 16 throw InputError. The levels stay where they are
 /// in memory while the refinement runs (they are reserved up front), so a caller may keep
 /// pointers to earlier ones.
