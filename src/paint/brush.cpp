@@ -35,7 +35,7 @@ std::vector<uint32_t> all_triangles(const PaintSurface& s) {
 
 // Straight-alpha blend of `src` into `dst` at strength w in [0,1].
 Rgba8 blend(Rgba8 dst, const float src[4], BlendMode mode, float w) {
-  float d[4], o[4];
+  float d[4], o[4] = {0, 0, 0, 0};
   rgba8_to_float(dst, d);
   const float a = w * src[3];
   switch (mode) {
@@ -57,7 +57,15 @@ Rgba8 blend(Rgba8 dst, const float src[4], BlendMode mode, float w) {
       o[3] = d[3] * (1 - w);
       break;
   }
-  return rgba8_from_float(o);
+  // rgba8_from_float without its not-finite case: every o[k] above is finite (src and w in
+  // [0, 1], and o[3] > 0 where it divides). The same rounding.
+  uint32_t c[4];
+  for (int k = 0; k < 4; ++k) {
+    const float u = std::clamp(o[k], 0.0f, 1.0f) * 255.0f;
+    const uint32_t r = uint32_t(u);
+    c[k] = r + uint32_t(u - float(r) >= 0.5f);
+  }
+  return pack_rgba8(c[0], c[1], c[2], c[3]);
 }
 
 inline float smooth01(float x) {
@@ -293,23 +301,27 @@ struct StrokePainter::State : LeafPainter {
   // The nearest point to the cell's centre on the cell's triangles of each side.
   void nearest(const CellBox& box, const LeafCell& cell, std::span<const uint32_t> cell_tris,
                Near& e) const {
-    e.has = 0;
-    for (int side = 0; side < 2; ++side) {
-      float best = INFINITY;
-      V3 q, nq;
-      for (uint32_t t : cell_tris) {
-        const float* n = surf.normal(t);
-        if (surf.side(cell.tag, t) != side) continue;
-        const V3 p = closest_on_triangle(box.c, v3(surf.corner(t, 0)), v3(surf.corner(t, 1)),
-                                         v3(surf.corner(t, 2)));
-        const V3 d = p - box.c;
-        const float d2 = dot(d, d);
-        if (d2 < best) best = d2, q = p, nq = v3(n);
-      }
-      if (best == INFINITY) continue;
-      e.has = uint8_t(e.has | 1 << side), e.q[side] = q, e.nq[side] = nq;
+    // Both sides in one pass, each keeping the first nearest in list order.
+    float best[2] = {INFINITY, INFINITY};
+    uint32_t arg[2] = {0, 0};
+    for (uint32_t t : cell_tris) {
+      const int side = surf.side(cell.tag, t);
+      const V3 p = closest_on_triangle(box.c, v3(surf.corner(t, 0)), v3(surf.corner(t, 1)),
+                                       v3(surf.corner(t, 2)));
+      const V3 d = p - box.c;
+      const float d2 = dot(d, d);
+      if (d2 < best[side]) best[side] = d2, e.q[side] = p, arg[side] = t;
     }
+    e.has = 0;
+    for (int side = 0; side < 2; ++side)
+      if (best[side] != INFINITY)
+        e.has = uint8_t(e.has | 1 << side), e.nq[side] = v3(surf.normal(arg[side]));
   }
+
+  // The last 4x4x4 block paint() keyed (any cell of it, its level) and its key bits.
+  uint32_t key_x = ~0u, key_y = ~0u, key_z = ~0u;
+  int key_level = -1;
+  uint64_t key_block = 0;
 
   void paint(const CellBox& box, LeafCell& cell, std::span<const uint32_t> cell_tris,
              uint32_t memo) override {
@@ -326,7 +338,15 @@ struct StrokePainter::State : LeafPainter {
     } else {
       nearest(box, cell, cell_tris, local);
     }
-    const uint64_t cell_key = morton3(box.x, box.y, box.z) | uint64_t(box.level) << 48;
+    // morton3 splits into the code of the 4x4x4 block (a brick's leaves) shifted by 6 and the
+    // code of the cell inside it: the block's, computed once for its up to 64 leaves.
+    if ((box.x ^ key_x) >> 2 || (box.y ^ key_y) >> 2 || (box.z ^ key_z) >> 2 ||
+        box.level != key_level) {
+      key_x = box.x, key_y = box.y, key_z = box.z, key_level = box.level;
+      key_block = morton3(box.x >> 2, box.y >> 2, box.z >> 2) << 6 | uint64_t(box.level) << 48;
+    }
+    auto low2 = [](uint32_t v) { return uint64_t((v & 1u) | (v & 2u) << 2); };
+    const uint64_t cell_key = key_block | low2(box.x) | low2(box.y) << 1 | low2(box.z) << 2;
     for (int side = 0; side < 2; ++side) {
       if (!(e->has >> side & 1)) continue;
       if (side == 1 && !cell.dbl) cell.dbl = true, cell.s[1] = tex.background();

@@ -75,6 +75,15 @@ Brick decode_brick(std::span<const uint32_t> pool, uint32_t word);
 /// Encodes a brick into `out`; returns the double flag to or into the brick word.
 uint32_t encode_brick(const Brick& b, std::vector<uint32_t>& out);
 
+/// std::clamp(std::lround(v), 0, 255) for v >= 0 (not NaN), without the library call (means are
+/// taken per brick and per node on every dab): v - r is exact below 2^52, so ties go up, away
+/// from zero, as lround's do.
+inline uint32_t round_byte(double v) {
+  if (!(v < 255.0)) return 255;
+  const uint32_t r = uint32_t(v);
+  return r + uint32_t(v - double(r) >= 0.5);
+}
+
 /// Premultiplied mean of colours (equal weights), back to straight RGBA8. 0 for none.
 class ColorMean {
  public:

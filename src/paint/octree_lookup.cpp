@@ -10,6 +10,8 @@
 #include <cpuid.h>
 #include <immintrin.h>
 
+#include "octree_blocks.hpp"
+
 namespace limn {
 
 namespace {
@@ -93,8 +95,8 @@ Rgba8 premul_mean(const uint32_t* s, size_t count) {
     r += channel(s[i], 0) * al, g += channel(s[i], 1) * al, b += channel(s[i], 2) * al, a += al;
   }
   if (a <= 0) return 0;
-  auto q = [](double v) { return uint32_t(std::clamp(std::lround(v), 0l, 255l)); };
-  return pack_rgba8(q(r / a), q(g / a), q(b / a), q(a / double(count)));
+  return pack_rgba8(detail::round_byte(r / a), detail::round_byte(g / a), detail::round_byte(b / a),
+                    detail::round_byte(a / double(count)));
 }
 
 // The walk itself, written once and compiled twice: for CPUs with AVX2's integer set (popcnt,

@@ -28,6 +28,15 @@ bool Refiner::meets(const CellBox& b) const {
   return d[0] * d[0] + d[1] * d[1] + d[2] * d[2] <= region_.r * region_.r;
 }
 
+bool Refiner::within(const CellBox& b) const {
+  if (region_.everything) return true;
+  const float d[3] = {std::fabs(region_.c.x - b.c.x) + b.h, std::fabs(region_.c.y - b.c.y) + b.h,
+                      std::fabs(region_.c.z - b.c.z) + b.h};
+  // The margin (2^-8 of r^2) is far above the few units of rounding in either test, whose terms
+  // are all on the scale of r, so meets() is true for every cell inside b.
+  return d[0] * d[0] + d[1] * d[1] + d[2] * d[2] <= region_.r * region_.r * (1.0f - 1.0f / 256);
+}
+
 void Refiner::filter(std::span<const uint32_t> in, const CellBox& b,
                      std::vector<uint32_t>& out) const {
   out.clear();
@@ -237,6 +246,7 @@ bool Refiner::build_brick(const CellBox& cb, const LeafCell& leaf, std::span<con
   // full list less the triangles outside tris: the same triangles, tested against the same
   // boxes, that splitting tris again would keep.
   const bool same = tris.size() == full.size();
+  const bool inside = within(cb);
   for (int c1 = 0; c1 < 8; ++c1) {
     if (p1[size_t(c1)].empty()) continue;
     const CellBox& b1 = k1[c1];
@@ -250,14 +260,14 @@ bool Refiner::build_brick(const CellBox& cb, const LeafCell& leaf, std::span<con
       b.cell[m] = make_leaf(f2, &leaf);
       ++stats.leaves_created;
     }
-    if (!meets(b1)) continue;
+    if (!inside && !meets(b1)) continue;
     for (int c2 = 0; c2 < 8; ++c2) {
       const std::vector<uint32_t>& f2 = p2[size_t(c2)];
       if (f2.empty()) continue;
       if (!same) intersect_sorted(f2, tris, sub_);
       const std::vector<uint32_t>& t2 = same ? f2 : sub_;
       const CellBox& b2 = k2[c2];
-      if (t2.empty() || !meets(b2)) continue;
+      if (t2.empty() || !(inside || meets(b2))) continue;
       if (painter_)
         painter_->paint(b2, b.cell[8 * c1 + c2], t2, LeafPainter::kNoMemo), ++stats.leaves_painted;
     }
@@ -314,10 +324,12 @@ void Refiner::visit_brick(Brick& b, const CellBox& bb, std::span<const uint32_t>
   // Only children meeting the region are visited: only they are split.
   CellBox k1[8], k2[8][8];
   children(bb, k1);
-  const uint32_t want1 = meeting(k1);
+  // Most bricks of a dab lie inside its ball: then all their cells meet it.
+  const bool inside = within(bb);
+  const uint32_t want1 = inside ? 0xffu : meeting(k1);
   uint32_t want2[8] = {};
   for (int c1 = 0; c1 < 8; ++c1)
-    if (want1 >> c1 & 1) children(k1[c1], k2[c1]), want2[c1] = meeting(k2[c1]);
+    if (want1 >> c1 & 1) children(k1[c1], k2[c1]), want2[c1] = inside ? 0xffu : meeting(k2[c1]);
   KeptBrick* kept = nullptr;
   uint32_t memo0 = LeafPainter::kNoMemo;  // memo of leaf m: memo0 + m
   auto visit_leaf = [&](int c1, int c2, std::span<const uint32_t> t2) {

@@ -111,6 +111,8 @@ class Refiner {
 
  private:
   bool meets(const CellBox& b) const;
+  /// b lies inside the region (with a margin): meets() holds for every cell inside b.
+  bool within(const CellBox& b) const;
   /// Which of b's children (`kids`) meet the region (bit c: child c).
   uint32_t meeting(const CellBox kids[8]) const;
   void full_tris(const CellBox& b, std::span<const uint32_t> region_tris,

@@ -3,10 +3,13 @@
 // cells), and the quick containment test never claims an overlap the scalar test denies.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
 #include "../../src/paint/geometry.hpp"
+#include "../../src/paint/octree_blocks.hpp"
+#include "limn/paint/texture.hpp"
 
 namespace limn {
 namespace {
@@ -59,6 +62,33 @@ TEST(PaintGeometry, EightBoxTestEqualsTheScalarTest) {
   EXPECT_GT(overlaps, total / 10);
   EXPECT_LT(overlaps, total * 9 / 10);
   EXPECT_GT(inside, total / 100);
+}
+
+// The paint layer rounds colours to bytes without calling lround (dabs and means round
+// thousands of values): every float of [0, 1] in steps of 2^-20, every tie (k + 0.5) / 255 and
+// its neighbours, and doubles in [0, 255] must round as clamp(lround(255 v)) and clamp(lround(v))
+// do.
+TEST(PaintGeometry, ByteRoundingEqualsLround) {
+  auto ref = [](float v) {
+    return std::isfinite(v) ? uint32_t(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f)) : 0u;
+  };
+  auto check = [&](float v) {
+    const float in[4] = {v, v, v, v};
+    ASSERT_EQ(channel(rgba8_from_float(in), 0), ref(v)) << v;
+  };
+  for (uint32_t i = 0; i <= (1u << 20); ++i) check(float(i) / float(1u << 20));
+  for (int k = 0; k < 255; ++k) {
+    const float tie = (float(k) + 0.5f) / 255.0f;
+    check(tie), check(std::nextafter(tie, 0.0f)), check(std::nextafter(tie, 1.0f));
+  }
+  check(-1.0f), check(2.0f), check(NAN), check(INFINITY);
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(0, 255);
+  for (int i = 0; i < 1000000; ++i) {
+    const double v = i < 256 ? double(i) + 0.5 : u(rng);
+    ASSERT_EQ(detail::round_byte(v), uint32_t(std::min(std::lround(v), 255l))) << v;
+  }
+  EXPECT_EQ(detail::round_byte(255.0), 255u);
 }
 
 }  // namespace
