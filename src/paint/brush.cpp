@@ -35,7 +35,7 @@ std::vector<uint32_t> all_triangles(const PaintSurface& s) {
 
 // Straight-alpha blend of `src` into `dst` at strength w in [0,1].
 Rgba8 blend(Rgba8 dst, const float src[4], BlendMode mode, float w) {
-  float d[4], o[4] = {0, 0, 0, 0};
+  float d[4], o[4];
   rgba8_to_float(dst, d);
   const float a = w * src[3];
   switch (mode) {
@@ -57,15 +57,7 @@ Rgba8 blend(Rgba8 dst, const float src[4], BlendMode mode, float w) {
       o[3] = d[3] * (1 - w);
       break;
   }
-  // rgba8_from_float without its not-finite case: every o[k] above is finite (src and w in
-  // [0, 1], and o[3] > 0 where it divides). The same rounding.
-  uint32_t c[4];
-  for (int k = 0; k < 4; ++k) {
-    const float u = std::clamp(o[k], 0.0f, 1.0f) * 255.0f;
-    const uint32_t r = uint32_t(u);
-    c[k] = r + uint32_t(u - float(r) >= 0.5f);
-  }
-  return pack_rgba8(c[0], c[1], c[2], c[3]);
+  return rgba8_from_float(o);
 }
 
 inline float smooth01(float x) {

@@ -29,11 +29,7 @@ Rgba8 rgba8_from_float(const float rgba[4]) {
   uint32_t c[4];
   for (int k = 0; k < 4; ++k) {
     const float v = std::isfinite(rgba[k]) ? std::clamp(rgba[k], 0.0f, 1.0f) : 0.0f;
-    // lround without the library call (dabs blend thousands of texels): u - r is exact for
-    // u in [0, 255], so ties go up, away from zero, as lround's do.
-    const float u = v * 255.0f;
-    const uint32_t r = uint32_t(u);
-    c[k] = r + uint32_t(u - float(r) >= 0.5f);
+    c[k] = unit_to_byte(v);
   }
   return pack_rgba8(c[0], c[1], c[2], c[3]);
 }
