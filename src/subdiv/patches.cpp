@@ -22,6 +22,7 @@
 #include <utility>
 
 #include "limn/mesh/topology.hpp"
+#include "shared_weights.hpp"
 
 namespace limn {
 
@@ -273,13 +274,13 @@ class GregoryCap {
   std::vector<uint32_t> row_idx;  // emit_row's scratch: a row's terms before they are copied
   std::vector<float> row_w;
 
-  // Appends the row `t` to `table`; returns its index.
-  uint32_t emit_row(const Terms& t, StencilTable& table) {
+  // Appends the row `t` to `table` (its weights shared through `shared`); returns its index.
+  uint32_t emit_row(const Terms& t, StencilTable& table, detail::SharedWeights& shared) {
     if (row_idx.size() < support.size())
       row_idx.resize(support.size()), row_w.resize(support.size());
     const size_t n = t.emit(row_idx.data(), row_w.data());
     table.indices.insert(table.indices.end(), row_idx.begin(), row_idx.begin() + long(n));
-    table.weights.insert(table.weights.end(), row_w.begin(), row_w.begin() + long(n));
+    table.weight_offsets.push_back(shared.add(table.weights, row_w.data(), uint32_t(n)));
     table.offsets.push_back(uint32_t(table.indices.size()));
     return uint32_t(table.size() - 1);
   }
@@ -301,7 +302,7 @@ class GregoryCap {
   // corners of its edge are regular, else over the corner points (rows p, e_near, e_far of
   // gregory_stencils) and four ring points. Returns its row.
   uint32_t emit_face_point(int i, bool plus, uint32_t p, uint32_t e_near, uint32_t e_far,
-                           StencilTable& table) const;
+                           StencilTable& table, detail::SharedWeights& shared) const;
 };
 
 class Builder {
@@ -350,6 +351,9 @@ class Builder {
   std::vector<uint32_t> level_offsets_{0};  // first global point id of each level, as refined
   std::vector<std::vector<uint32_t>> node_of_level_;  // hierarchy: node of each level's faces
   GregoryCap cap_;                                    // reused: its buffers stay allocated
+  // The end-cap tables' weights, one sharer per kind of row (P, Ep, Em; Fp, Fm) over each
+  // table's pool: a row most often equals the last row of its kind.
+  detail::SharedWeights corner_weights_[3], face_weights_[2];
   // cap_'s rows into out_: its corner points shared with the level's earlier end caps at the
   // same corner fans; ids gets the 20 points (face points marked kCapRef).
   void emit_cap(size_t k, const RefinedLevel& R, const uint32_t a[4], uint32_t ids[20]);
@@ -946,11 +950,14 @@ void GregoryCap::edge_points(int i) {
 }
 
 uint32_t GregoryCap::emit_face_point(int i, bool plus, uint32_t p_row, uint32_t e_near,
-                                     uint32_t e_far, StencilTable& table) const {
+                                     uint32_t e_far, StencilTable& table,
+                                     detail::SharedWeights& shared) const {
   const Corner& k = c[i];
   const int far = plus ? (i + 1) & 3 : (i + 3) & 3;
+  float row[8];  // at most 3 corner points and 4 ring points
+  uint32_t terms = 0;
   auto put = [&](uint32_t id, double w) {
-    if (w != 0.0) table.indices.push_back(id), table.weights.push_back(float(w));
+    if (w != 0.0) table.indices.push_back(id), row[terms++] = float(w);
   };
   if (plus ? k.fp_regular : k.fm_regular) {
     put(k.v, 4.0 / 9.0), put(c[(i + 3) & 3].v, 2.0 / 9.0), put(c[(i + 1) & 3].v, 2.0 / 9.0);
@@ -969,6 +976,7 @@ uint32_t GregoryCap::emit_face_point(int i, bool plus, uint32_t p_row, uint32_t 
     put(k.ring[2 * size_t(edge) + 1], sign / 18.0);
     put(k.ring[2 * size_t(next)], sign / 9.0);
   }
+  table.weight_offsets.push_back(shared.add(table.weights, row, terms));
   table.offsets.push_back(uint32_t(table.indices.size()));
   return uint32_t(table.size() - 1);
 }
@@ -1007,7 +1015,7 @@ void Builder::reserve_output(size_t k, const Level& L, const RefinedLevel& R) {
     const size_t rows = made ? g->size() / made + 1 : corner ? 6 : 8;
     const size_t entries = made ? g->indices.size() / made + 1 : corner ? 60 : 48;
     room(g->offsets, rows * caps);
-    room(g->indices, entries * caps), room(g->weights, entries * caps);
+    room(g->indices, entries * caps), room(g->weight_offsets, rows * caps);
   }
 }
 
@@ -1268,7 +1276,7 @@ void Builder::emit_cap(size_t k, const RefinedLevel& R, const uint32_t a[4], uin
       if (rows[i][j] != kNone) continue;
       if (!made) cap.edge_points(i), made = true;
       const Terms& t = j == 0 ? cap.p[i] : j == 1 ? cap.ep[i] : cap.em[i];
-      rows[i][j] = cap.emit_row(t, corners);
+      rows[i][j] = cap.emit_row(t, corners, corner_weights_[j]);
       shared_.push_back({c.fan, to[j], rows[i][j], shared_head_[a[i]]});
       shared_head_[a[i]] = uint32_t(shared_.size() - 1);
     }
@@ -1280,9 +1288,11 @@ void Builder::emit_cap(size_t k, const RefinedLevel& R, const uint32_t a[4], uin
     uint32_t fp = kNone, fm = kNone;
     // On a boundary patch edge both face points are the same point.
     if (!c.fp_copied)
-      fp = cap.emit_face_point(i, true, rows[i][0], rows[i][1], rows[next][2], faces);
+      fp = cap.emit_face_point(i, true, rows[i][0], rows[i][1], rows[next][2], faces,
+                               face_weights_[0]);
     if (!c.fm_copied)
-      fm = cap.emit_face_point(i, false, rows[i][0], rows[i][2], rows[prev][1], faces);
+      fm = cap.emit_face_point(i, false, rows[i][0], rows[i][2], rows[prev][1], faces,
+                               face_weights_[1]);
     if (c.fp_copied) fp = fm;
     if (c.fm_copied) fm = fp;
     ids[5 * i] = rows[i][0], ids[5 * i + 1] = rows[i][1], ids[5 * i + 2] = rows[i][2];
@@ -1332,6 +1342,7 @@ void prune_points(PatchTable& t) {
     StencilTable& s = t.level_stencils[k - 1];
     const uint32_t base = t.level_offsets[k], prev = t.level_offsets[k - 1];
     const size_t n = s.size();
+    const bool shared = s.shared();
     uint32_t kept = 0, at = 0, begin = 0;
     for (size_t i = 0; i < n; ++i) {
       const uint32_t end = s.offsets[i + 1];  // read before the compaction writes over it
@@ -1342,17 +1353,24 @@ void prune_points(PatchTable& t) {
       id[base + i] = offsets[k] + kept;
       for (uint32_t j = begin; j < end; ++j, ++at) {
         s.indices[at] = id[prev + s.indices[j]] - offsets[k - 1];
-        s.weights[at] = s.weights[j];
+        if (!shared) s.weights[at] = s.weights[j];
       }
+      if (shared) s.weight_offsets[kept] = s.weight_offsets[i];
       s.offsets[++kept] = at;
       begin = end;
     }
-    s.offsets.resize(kept + 1), s.indices.resize(at), s.weights.resize(at);
+    s.offsets.resize(kept + 1), s.indices.resize(at);
+    if (shared)
+      s.weight_offsets.resize(kept);
+    else
+      s.weights.resize(at);
     // Giving the room back means a copy into fresh pages (the kernel's page faults cost more
     // than the copy): only when it frees enough to matter. Region tables are copied into the
     // merged table anyway.
-    if ((s.indices.capacity() - at) * (sizeof(uint32_t) + sizeof(float)) > kShrinkBytes)
+    if ((s.indices.capacity() - at) * sizeof(uint32_t) > kShrinkBytes) {
       s.offsets.shrink_to_fit(), s.indices.shrink_to_fit(), s.weights.shrink_to_fit();
+      s.weight_offsets.shrink_to_fit();
+    }
     offsets[k + 1] = offsets[k] + kept;
   }
   for (uint32_t& p : t.regular_points) p = id[p];
@@ -1709,6 +1727,15 @@ class RegionBuilder {
     r.mesh = Mesh{};
   }
 
+  // Appends src's rows' weights to dst (shared: src's pool after dst's, each region's rows keep
+  // their own copy of a row they share with another region's).
+  static void append_weights(const StencilTable& src, StencilTable& dst) {
+    const uint32_t at = uint32_t(dst.weights.size());
+    for (size_t i = 0; i < src.size(); ++i)
+      dst.weight_offsets.push_back(at + (src.shared() ? src.weight_offsets[i] : src.offsets[i]));
+    dst.weights.insert(dst.weights.end(), src.weights.begin(), src.weights.end());
+  }
+
   // Appends a region's table: level-k rows after the earlier regions' (ids shifted by their
   // counts), patch points as ids within their level (rebased in finish()).
   void merge(const Region& r, PatchStats* stats) {
@@ -1730,7 +1757,7 @@ class RegionBuilder {
       } else {
         for (const uint32_t p : src.indices) dst.indices.push_back(base[k - 1] + p);
       }
-      dst.weights.insert(dst.weights.end(), src.weights.begin(), src.weights.end());
+      append_weights(src, dst);
       count_[k] += uint32_t(src.size());
     }
     // A level-k patch's points are all level-k points.
@@ -1785,7 +1812,7 @@ class RegionBuilder {
         }
         dst.offsets.push_back(shift + src.offsets[row + 1]);
       }
-      dst.weights.insert(dst.weights.end(), src.weights.begin(), src.weights.end());
+      append_weights(src, dst);
     };
     append(g, dg, corner_level_.data() + corner_shift);  // data(): the arrays may be empty
     append(gf, dgf, face_level_.data() + face_shift);
@@ -1805,9 +1832,9 @@ class RegionBuilder {
     const double s = scale * 1.1;
     auto grow = [&](auto& v) { v.reserve(size_t(double(v.size()) * s)); };
     for (StencilTable& st : out_.level_stencils)
-      grow(st.offsets), grow(st.indices), grow(st.weights);
+      grow(st.offsets), grow(st.indices), grow(st.weight_offsets);
     for (StencilTable* g : {&out_.gregory_stencils, &out_.gregory_face_stencils})
-      grow(g->offsets), grow(g->indices), grow(g->weights);
+      grow(g->offsets), grow(g->indices), grow(g->weight_offsets);
     grow(out_.regular_points), grow(out_.regular_params);
     grow(out_.gregory_points), grow(out_.gregory_params);
   }

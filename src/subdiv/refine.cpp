@@ -18,6 +18,7 @@
 // point to edge point) then two per parent edge (edge point to each end's vertex point). Sparse
 // levels get theirs in closed form too (sparse_child_adj), with one corner per selected face.
 #include "limn/subdiv/refine.hpp"
+#include "shared_weights.hpp"
 
 #include <fmt/format.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -795,41 +796,48 @@ void for_stencil_chunks(const SubdivOptions& o, const RefinedLevel& P, const Adj
   tbb::parallel_for(size_t(0), chunks, run);
 }
 
-// All the child points' stencils as one table. Large levels take two parallel passes (sizes,
-// then entries in place): computing each stencil twice costs less than holding (and first
-// touching) the table twice. With `keep`, only points i with keep[i] get their stencil; the
-// others get empty rows.
+// All the child points' stencils as one table, rows sharing their weights (see StencilTable).
+// Large levels take two parallel passes (sizes, then entries in place): computing each stencil
+// twice costs less than holding (and first touching) the table twice; each chunk of the second
+// pass shares weights within itself, and the chunks' pools are concatenated. With `keep`, only
+// points i with keep[i] get their stencil; the others get empty rows.
 StencilTable build_stencils(const SubdivOptions& o, const RefinedLevel& P, const Adj& a,
                             const Selection& sel, const uint8_t* keep = nullptr) {
   const size_t n = sel.points();
   StencilTable out;
+  std::vector<float> w;  // a row's weights before they are shared
+  auto share = [&](detail::SharedWeights& pool, const Rules& rules, uint32_t* indices, size_t k) {
+    if (w.size() < k) w.resize(std::max(k, size_t(64)));
+    rules.write(indices, w.data());
+    return pool.add(out.weights, w.data(), uint32_t(k));
+  };
   if (n < 4 * kStencilChunk) {  // small: one serial pass, writing in place
     // Room reserved for the usual 4-9 terms a point (only address space: pages are touched as
     // the size grows in small steps just ahead of the writes), and no per-stencil append.
     out.offsets.resize(n + 1);
+    out.weight_offsets.resize(n);
     size_t rows = n;  // with `keep`, the rows that get a stencil
     if (keep) rows = size_t(std::count_if(keep, keep + n, [](uint8_t x) { return x != 0; }));
-    out.indices.reserve(7 * rows + 64), out.weights.reserve(7 * rows + 64);
+    out.indices.reserve(7 * rows + 64);
     constexpr size_t kStep = 4096;
     size_t used = 0;
     Rules rules(o, P, a, sel);
+    detail::SharedWeights pool;
     for (size_t i = 0; i < n; ++i) {
       if (keep && !keep[i]) {
         out.offsets[i + 1] = uint32_t(used);
         continue;
       }
       const size_t k = rules.compute(i);
-      if (used + k > out.indices.size()) {
-        const size_t size = std::max(used + k, out.indices.size() + kStep);
-        out.indices.resize(size), out.weights.resize(size);
-      }
-      rules.write(out.indices.data() + used, out.weights.data() + used);
+      if (used + k > out.indices.size())
+        out.indices.resize(std::max(used + k, out.indices.size() + kStep));
+      out.weight_offsets[i] = share(pool, rules, out.indices.data() + used, k);
       used += k;
       if (used > UINT32_MAX)
         throw InputError("refinement level needs more than 2^32 stencil entries");
       out.offsets[i + 1] = uint32_t(used);
     }
-    out.indices.resize(used), out.weights.resize(used);
+    out.indices.resize(used);
     return out;
   }
   refill(out.offsets, n + 1, 0u);
@@ -848,14 +856,30 @@ StencilTable build_stencils(const SubdivOptions& o, const RefinedLevel& P, const
   }
   std::vector<uint32_t>().swap(sizes);
   refill(out.indices, total, 0u);
-  refill(out.weights, total, 0.0f);
-  parallel_range(n, kStencilChunk, [&](size_t b, size_t e) {
+  refill(out.weight_offsets, n, 0u);
+  const size_t chunks = (n + kStencilChunk - 1) / kStencilChunk;
+  std::vector<std::vector<float>> pools(chunks);
+  tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
     Rules rules(o, P, a, sel);
-    for (size_t i = b; i < e; ++i) {
+    detail::SharedWeights pool;
+    std::vector<float> row;
+    for (size_t i = c * kStencilChunk, e = std::min(n, i + kStencilChunk); i < e; ++i) {
       if (keep && !keep[i]) continue;
-      rules.compute(i);
-      rules.write(out.indices.data() + out.offsets[i], out.weights.data() + out.offsets[i]);
+      const size_t k = rules.compute(i);
+      if (row.size() < k) row.resize(std::max(k, size_t(64)));
+      rules.write(out.indices.data() + out.offsets[i], row.data());
+      out.weight_offsets[i] = pool.add(pools[c], row.data(), uint32_t(k));
     }
+  });
+  std::vector<uint32_t> base(chunks + 1, 0);
+  for (size_t c = 0; c < chunks; ++c) base[c + 1] = base[c] + uint32_t(pools[c].size());
+  out.weights.reserve(base[chunks]);
+  for (const std::vector<float>& p : pools)
+    out.weights.insert(out.weights.end(), p.begin(), p.end());
+  parallel_range(chunks, 1, [&](size_t cb, size_t ce) {
+    for (size_t c = cb; c < ce; ++c)
+      for (size_t i = c * kStencilChunk, e = std::min(n, i + kStencilChunk); i < e; ++i)
+        out.weight_offsets[i] += base[c];
   });
   return out;
 }
@@ -1102,20 +1126,22 @@ __attribute__((target("avx2,fma"), always_inline)) inline __m256d load3_avx2(con
   return _mm256_cvtps_pd(_mm_insert_ps(_mm_castpd_ps(_mm_set_sd(xy)), _mm_load_ss(s + 2), 0x20));
 }
 
-__attribute__((target("avx2,fma"))) void apply3_avx2(const uint32_t* off, const uint32_t* idx,
-                                                     const float* w, size_t b, size_t e,
+__attribute__((target("avx2,fma"))) void apply3_avx2(const StencilTable& t, size_t b, size_t e,
                                                      const float* in, float* out) {
+  const uint32_t* off = t.offsets.data();
   for (size_t i = b; i < e; ++i) {
+    const uint32_t* idx = t.indices.data() + off[i];
+    const float* w = t.row_weights(i);
+    const uint32_t n = off[i + 1] - off[i];
     // Two accumulators halve the chain of dependent additions per stencil.
     __m256d a0 = _mm256_setzero_pd(), a1 = _mm256_setzero_pd();
-    uint32_t j = off[i];
-    const uint32_t end = off[i + 1];
-    for (; j + 1 < end; j += 2) {
+    uint32_t j = 0;
+    for (; j + 1 < n; j += 2) {
       a0 = _mm256_fmadd_pd(_mm256_set1_pd(double(w[j])), load3_avx2(in + 3 * size_t(idx[j])), a0);
       a1 = _mm256_fmadd_pd(_mm256_set1_pd(double(w[j + 1])),
                            load3_avx2(in + 3 * size_t(idx[j + 1])), a1);
     }
-    if (j < end)
+    if (j < n)
       a0 = _mm256_fmadd_pd(_mm256_set1_pd(double(w[j])), load3_avx2(in + 3 * size_t(idx[j])), a0);
     const __m256d acc = _mm256_add_pd(a0, a1);
     const __m128 r = _mm256_cvtpd_ps(acc);
@@ -1133,19 +1159,19 @@ __attribute__((target("avx2,fma"))) void apply3_avx2(const uint32_t* off, const 
 void apply_serial(const StencilTable& table, size_t b, size_t e, const float* in, float* out,
                   int channels) {
   const uint32_t* off = table.offsets.data();
-  const uint32_t* idx = table.indices.data();
-  const float* w = table.weights.data();
   const size_t ch = size_t(channels);
   // Sums in double: a valence-360 vertex sums ~1000 terms, and float accumulation alone would
   // cost ~1e-6 of the model's size per level.
   if (channels == 3) {
 #if LIMN_X86_DISPATCH
     static const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-    if (avx2) return apply3_avx2(off, idx, w, b, e, in, out);
+    if (avx2) return apply3_avx2(table, b, e, in, out);
 #endif
     for (size_t i = b; i < e; ++i) {
+      const uint32_t* idx = table.indices.data() + off[i];
+      const float* w = table.row_weights(i);
       double x = 0, y = 0, z = 0;
-      for (uint32_t j = off[i]; j < off[i + 1]; ++j) {
+      for (uint32_t j = 0; j < off[i + 1] - off[i]; ++j) {
         const float* s = in + 3 * size_t(idx[j]);
         const double wj = w[j];
         x += wj * s[0], y += wj * s[1], z += wj * s[2];
@@ -1157,8 +1183,10 @@ void apply_serial(const StencilTable& table, size_t b, size_t e, const float* in
   }
   double acc[kMaxChannels];
   for (size_t i = b; i < e; ++i) {
+    const uint32_t* idx = table.indices.data() + off[i];
+    const float* w = table.row_weights(i);
     for (size_t k = 0; k < ch; ++k) acc[k] = 0.0;
-    for (uint32_t j = off[i]; j < off[i + 1]; ++j) {
+    for (uint32_t j = 0; j < off[i + 1] - off[i]; ++j) {
       const float* s = in + size_t(idx[j]) * ch;
       const double wj = w[j];
       for (size_t k = 0; k < ch; ++k) acc[k] += wj * s[k];
@@ -1207,13 +1235,15 @@ StencilTable compose_stencils(const StencilTable& outer, const StencilTable& inn
   // Merges point p's terms into s.touched (sorted, exact cancellations dropped).
   auto merge = [&](Scratch& s, size_t p) {
     s.touched.clear();
+    const float* ow = outer.row_weights(p);
     for (uint32_t j = outer.offsets[p]; j < outer.offsets[p + 1]; ++j) {
       const uint32_t q = outer.indices[j];
-      const double w = outer.weights[j];
+      const double w = ow[j - outer.offsets[p]];
+      const float* iw = inner.row_weights(q);
       for (uint32_t k = inner.offsets[q]; k < inner.offsets[q + 1]; ++k) {
         const uint32_t src = inner.indices[k];
         if (!s.seen[src]) s.seen[src] = 1, s.touched.push_back(src);
-        s.acc[src] += w * double(inner.weights[k]);
+        s.acc[src] += w * double(iw[k - inner.offsets[q]]);
       }
     }
     std::sort(s.touched.begin(), s.touched.end());

@@ -489,13 +489,16 @@ TEST(Patches, RegionBuildsEqualTheWholeCage) {
     EXPECT_EQ(one.gregory_points, many.gregory_points);
     EXPECT_EQ(one.gregory_stencils.indices, many.gregory_stencils.indices);
     EXPECT_EQ(one.gregory_stencils.weights, many.gregory_stencils.weights);
+    EXPECT_EQ(one.gregory_stencils.weight_offsets, many.gregory_stencils.weight_offsets);
     EXPECT_EQ(one.gregory_face_stencils.indices, many.gregory_face_stencils.indices);
     EXPECT_EQ(one.gregory_face_stencils.weights, many.gregory_face_stencils.weights);
+    EXPECT_EQ(one.gregory_face_stencils.weight_offsets, many.gregory_face_stencils.weight_offsets);
     ASSERT_EQ(one.level_stencils.size(), many.level_stencils.size());
     for (size_t k = 0; k < one.level_stencils.size(); ++k) {
       EXPECT_EQ(one.level_stencils[k].offsets, many.level_stencils[k].offsets) << k;
       EXPECT_EQ(one.level_stencils[k].indices, many.level_stencils[k].indices) << k;
       EXPECT_EQ(one.level_stencils[k].weights, many.level_stencils[k].weights) << k;
+      EXPECT_EQ(one.level_stencils[k].weight_offsets, many.level_stencils[k].weight_offsets) << k;
     }
     ASSERT_EQ(one.regular_params.size(), many.regular_params.size());
     for (size_t i = 0; i < one.regular_params.size(); ++i)

@@ -2,7 +2,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
+#include <map>
+#include <random>
 
+#include "../../src/subdiv/shared_weights.hpp"
 #include "limn/mesh/io.hpp"
 #include "limn/mesh/shapes.hpp"
 #include "limn/subdiv/refine.hpp"
@@ -56,9 +60,80 @@ TEST(Stencils, CageStencilsMatchLevelByLevel) {
       // Weights of an affine-invariant scheme sum to one.
       for (size_t p = 0; p < flat.size(); ++p) {
         double sum = 0;
-        for (uint32_t j = flat.offsets[p]; j < flat.offsets[p + 1]; ++j) sum += flat.weights[j];
+        const float* w = flat.row_weights(p);
+        for (uint32_t j = 0; j < flat.offsets[p + 1] - flat.offsets[p]; ++j) sum += w[j];
         ASSERT_NEAR(sum, 1.0, 1e-5) << "point " << p;
       }
+    }
+  }
+}
+
+TEST(Stencils, SharedWeightsKeepEachDistinctRowOnce) {
+  // Rows drawn from a few templates (as refinement's smooth rules are) and some unique ones;
+  // -0.0 and 0.0 differ in their bits, so they are different rows.
+  std::mt19937 rng(7);
+  std::vector<std::vector<float>> templates = {{}, {0.25f, 0.25f, 0.25f, 0.25f}, {0.0f}, {-0.0f}};
+  for (int i = 0; i < 3000; ++i) {  // enough distinct rows to grow the slots many times
+    std::vector<float> row(1 + rng() % 12);
+    for (float& x : row) x = float(rng() % 1000) / 999.0f;
+    templates.push_back(row);
+  }
+  std::vector<float> pool;
+  detail::SharedWeights shared;
+  std::map<std::vector<uint32_t>, uint32_t> seen;  // a row's bits -> its offset
+  for (int i = 0; i < 20000; ++i) {
+    const std::vector<float>& row = templates[i < 3004 ? size_t(i) : rng() % templates.size()];
+    const uint32_t n = uint32_t(row.size());
+    const uint32_t at = shared.add(pool, row.data(), n);
+    ASSERT_LE(size_t(at) + n, pool.size());
+    if (n) {
+      ASSERT_EQ(std::memcmp(pool.data() + at, row.data(), n * sizeof(float)), 0) << i;
+    }
+    std::vector<uint32_t> bits(n);
+    if (n) std::memcpy(bits.data(), row.data(), n * sizeof(float));
+    const auto [it, fresh] = seen.emplace(bits, at);
+    if (!fresh) {
+      EXPECT_EQ(it->second, at) << "row " << i << " stored twice";
+    }
+  }
+  size_t distinct = 0;
+  for (const auto& [bits, at] : seen) distinct += bits.size();
+  EXPECT_EQ(pool.size(), distinct);  // each distinct row once, nothing else
+}
+
+TEST(Stencils, SharedLevelsApplyLikeDenseRows) {
+  // Refinement tables share their rows' weights; applying them must give what one weight per
+  // entry gives (the AVX2 three-channel path and the generic path), and the pool is a small
+  // fraction of the entries.
+  for (const char* name : {"cage", "terrain-small"}) {
+    SCOPED_TRACE(name);
+    const Mesh m = make_shape(name);
+    const int depth = 4;
+    const UniformRefinement r = refine_uniform(m, depth, subdiv_options(m));
+    std::vector<float> level = m.positions;
+    for (int k = 0; k < depth; ++k) {
+      const StencilTable& t = r.stencils[size_t(k)];
+      ASSERT_TRUE(t.shared());
+      ASSERT_EQ(t.weight_offsets.size(), t.size());
+      EXPECT_LT(10 * t.weights.size(), t.indices.size()) << "level " << k + 1;
+      StencilTable dense;
+      dense.offsets = t.offsets;
+      dense.indices = t.indices;
+      for (size_t i = 0; i < t.size(); ++i)
+        dense.weights.insert(dense.weights.end(), t.row_weights(i),
+                             t.row_weights(i) + (t.offsets[i + 1] - t.offsets[i]));
+      ASSERT_EQ(dense.weights.size(), dense.indices.size());
+      for (const int channels : {3, 1}) {
+        std::vector<float> in(level.size() / 3 * size_t(channels));
+        for (size_t i = 0; i < in.size(); ++i) in[i] = level[i / size_t(channels) * 3];
+        std::vector<float> a(t.size() * size_t(channels)), b(a.size());
+        apply_stencils(t, in.data(), a.data(), channels);
+        apply_stencils(dense, in.data(), b.data(), channels);
+        EXPECT_EQ(a, b) << "level " << k + 1 << ", " << channels << " channels";
+      }
+      std::vector<float> next(3 * t.size());
+      apply_stencils(t, level.data(), next.data(), 3);
+      level = std::move(next);
     }
   }
 }

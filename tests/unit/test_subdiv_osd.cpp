@@ -377,9 +377,10 @@ void check_limit(const UniformRefinement& lr, const test::OsdRefinement& orf,
   const std::vector<OsdIndex>& map = maps.back().vertex;
   auto apply = [&](const StencilTable& t, size_t v, double out[3]) {
     out[0] = out[1] = out[2] = 0.0;
+    const float* w = t.row_weights(v);
     for (uint32_t j = t.offsets[v]; j < t.offsets[v + 1]; ++j)
       for (size_t c = 0; c < 3; ++c)
-        out[c] += double(t.weights[j]) * theirs[3 * size_t(map[t.indices[j]]) + c];
+        out[c] += double(w[j - t.offsets[v]]) * theirs[3 * size_t(map[t.indices[j]]) + c];
   };
   auto unit_cross = [](const double* a, const double* b, double n[3]) {
     n[0] = a[1] * b[2] - a[2] * b[1];

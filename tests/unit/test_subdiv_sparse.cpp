@@ -362,9 +362,10 @@ TEST(Sparse, WorkIsLinearInDepthNotExponential) {
   auto limit_at = [&](const RefinedLevel& L, const std::vector<float>& pts, size_t v) {
     const LimitStencils ls = limit_stencils(L);
     std::array<double, 3> q{0, 0, 0};
+    const float* w = ls.position.row_weights(v);
     for (uint32_t j = ls.position.offsets[v]; j < ls.position.offsets[v + 1]; ++j)
       for (size_t c = 0; c < 3; ++c)
-        q[c] += double(ls.position.weights[j]) * pts[3 * size_t(ls.position.indices[j]) + c];
+        q[c] += double(w[j - ls.position.offsets[v]]) * pts[3 * size_t(ls.position.indices[j]) + c];
     return q;
   };
   const auto deep = limit_at(last.level, sr.positions(cage, 8), desc);

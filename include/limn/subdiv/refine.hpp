@@ -31,12 +31,24 @@ struct SubdivOptions {
 SubdivOptions subdiv_options(const Mesh& mesh);
 
 /// Per-point weights over the points of the previous level (CSR): point i is
-/// sum_k weights[k] * previous[indices[k]] for k in [offsets[i], offsets[i+1]).
+/// sum_k w_i[k - offsets[i]] * previous[indices[k]] for k in [offsets[i], offsets[i+1]), where
+/// w_i = row_weights(i). Weights are either one per entry (weight_offsets empty: w_i starts at
+/// weights[offsets[i]]) or shared (w_i starts at weights[weight_offsets[i]], and rows whose
+/// weights are bit for bit equal keep one copy). Refinement and end-cap tables share: a level
+/// has only a handful of distinct rows (the smooth rules per valence), so sharing takes their
+/// weights from one float per entry to one offset per row, about 40% of the table. Composed
+/// and limit stencils keep one weight per entry.
 struct StencilTable {
   std::vector<uint32_t> offsets{0};
   std::vector<uint32_t> indices;
+  std::vector<uint32_t> weight_offsets;  ///< per row, or empty (see above)
   std::vector<float> weights;
   size_t size() const { return offsets.size() - 1; }
+  bool shared() const { return !weight_offsets.empty(); }
+  /// Row i's weights: offsets[i + 1] - offsets[i] floats.
+  const float* row_weights(size_t i) const {
+    return weights.data() + (weight_offsets.empty() ? offsets[i] : weight_offsets[i]);
+  }
 };
 
 /// Applies a stencil table to `channels` interleaved floats per point: out gets size() points.
