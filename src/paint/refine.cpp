@@ -136,10 +136,9 @@ void Refiner::full_tris(const CellBox& b, std::span<const uint32_t> region_tris,
     out.assign(region_tris.begin(), region_tris.end());
     return;
   }
-  std::vector<uint32_t> near;
+  out.clear();
   const float c[3] = {b.c.x, b.c.y, b.c.z};
-  s_.triangles_near(c, (b.h + slack_) * 1.7320508f * 1.0001f, near);
-  filter(near, b, out);
+  s_.triangles_in_box(c, b.h, slack_, out);
 }
 
 LeafCell Refiner::make_leaf(std::span<const uint32_t> tris, const LeafCell* parent) const {

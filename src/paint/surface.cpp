@@ -181,6 +181,28 @@ bool gather_callback(RTCPointQueryFunctionArguments* args) {
   return false;
 }
 
+struct BoxQuery {
+  const PaintSurface* s;
+  std::vector<uint32_t>* out;
+  paint_detail::V3 c;
+  float h, slack;
+};
+
+bool box_callback(RTCPointQueryFunctionArguments* args) {
+  const BoxQuery& q = *static_cast<const BoxQuery*>(args->userPtr);
+  const uint32_t t = args->primID;
+  const float* n = q.s->normal(t);
+  if (n[0] == 0 && n[1] == 0 && n[2] == 0) return false;
+  using paint_detail::v3;
+  const paint_detail::V3 a = v3(q.s->corner(t, 0)), b = v3(q.s->corner(t, 1)),
+                         d = v3(q.s->corner(t, 2));
+  // Refiner::filter's test, so the same triangles as filtering triangles_near's answer.
+  if (paint_detail::tri_inside_box(q.c, q.h, a, b, d, q.slack) ||
+      paint_detail::tri_box_overlap(q.c, q.h, a, b, d, q.slack))
+    q.out->push_back(t);
+  return false;
+}
+
 }  // namespace
 
 bool PaintSurface::closest_point(const float p[3], float max_dist, SurfaceHit& hit) const {
@@ -288,6 +310,21 @@ void PaintSurface::triangles_near(const float c[3], float r, std::vector<uint32_
     return n[0] == 0 && n[1] == 0 && n[2] == 0;
   });
   out.erase(it, out.end());
+  std::sort(out.begin() + std::ptrdiff_t(first), out.end());
+  out.erase(std::unique(out.begin() + std::ptrdiff_t(first), out.end()), out.end());
+}
+
+void PaintSurface::triangles_in_box(const float c[3], float h, float slack,
+                                    std::vector<uint32_t>& out) const {
+  const size_t first = out.size();
+  BoxQuery q{this, &out, {c[0], c[1], c[2]}, h, slack};
+  RTCPointQuery pq;
+  pq.x = c[0], pq.y = c[1], pq.z = c[2];
+  pq.time = 0;
+  pq.radius = (h + slack) * 1.7320508f * 1.0001f;  // the ball around the grown box
+  RTCPointQueryContext ctx;
+  rtcInitPointQueryContext(&ctx);
+  rtcPointQuery(embree_->scene, &pq, &ctx, &box_callback, &q);
   std::sort(out.begin() + std::ptrdiff_t(first), out.end());
   out.erase(std::unique(out.begin() + std::ptrdiff_t(first), out.end()), out.end());
 }

@@ -9,6 +9,8 @@
 
 #include "../../src/paint/geometry.hpp"
 #include "../../src/paint/octree_blocks.hpp"
+#include "limn/mesh/shapes.hpp"
+#include "limn/paint/surface.hpp"
 #include "limn/paint/texture.hpp"
 
 namespace limn {
@@ -89,6 +91,43 @@ TEST(PaintGeometry, ByteRoundingEqualsLround) {
     ASSERT_EQ(detail::round_byte(v), uint32_t(std::min(std::lround(v), 255l))) << v;
   }
   EXPECT_EQ(detail::round_byte(255.0), 255u);
+}
+
+// The BVH's box query against testing every triangle: the same triangles (the paint layer's box
+// test decides both), sorted, for boxes from larger than the shape down to depth-12 cells, many
+// of them on the surface.
+TEST(PaintGeometry, BoxQueryEqualsTestingEveryTriangle) {
+  const Mesh m = make_shape("torus");
+  const PaintSurface s(m);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(0, 1);
+  const Box& b = s.bounds();
+  size_t found = 0;
+  for (int iter = 0; iter < 400; ++iter) {
+    const float h = std::ldexp(b.diagonal(), -int(rng() % 13));
+    // On a vertex of the mesh every other time (cells the surface crosses), else anywhere.
+    float c[3];
+    const uint32_t t0 = uint32_t(rng() % s.triangle_count());
+    for (int k = 0; k < 3; ++k)
+      c[k] = iter % 2 ? s.corner(t0, 0)[k] + h * (u(rng) - 0.5f)
+                      : b.min[k] + (b.max[k] - b.min[k]) * u(rng);
+    const float slack = std::ldexp(h, -20);
+    std::vector<uint32_t> got, want;
+    s.triangles_in_box(c, h, slack, got);
+    const V3 cc = {c[0], c[1], c[2]};
+    for (uint32_t t = 0; t < s.triangle_count(); ++t) {
+      const float* n = s.normal(t);
+      if (n[0] == 0 && n[1] == 0 && n[2] == 0) continue;
+      const V3 p0 = paint_detail::v3(s.corner(t, 0)), p1 = paint_detail::v3(s.corner(t, 1)),
+               p2 = paint_detail::v3(s.corner(t, 2));
+      if (paint_detail::tri_inside_box(cc, h, p0, p1, p2, slack) ||
+          paint_detail::tri_box_overlap(cc, h, p0, p1, p2, slack))
+        want.push_back(t);
+    }
+    ASSERT_EQ(got, want) << "box " << iter << " half size " << h;
+    found += got.size();
+  }
+  EXPECT_GT(found, 400u);  // the boxes did meet the surface
 }
 
 }  // namespace

@@ -75,6 +75,11 @@ class PaintSurface {
   /// Appends the non-degenerate triangles whose bounds may meet the ball (c, r), sorted by index
   /// (a superset; callers filter exactly). O(log T + answer).
   void triangles_near(const float c[3], float r, std::vector<uint32_t>& out) const;
+  /// Appends the non-degenerate triangles meeting the axis-aligned box of centre c and half
+  /// size h grown by `slack`, sorted by index: exactly those of triangles_near(c, (h + slack)
+  /// sqrt 3) that the paint layer's box test (separating axes, touching counts) keeps, decided
+  /// as the BVH reports them instead of gathered first. O(log T + answer).
+  void triangles_in_box(const float c[3], float h, float slack, std::vector<uint32_t>& out) const;
 
  private:
   std::vector<float> corners_, normals_;
