@@ -214,6 +214,7 @@ struct Level {
   // kCutsKnown | kCuts (cuts_at_inf_sharp), kPlainKnown | kPlain (plain_interior).
   mutable std::vector<uint8_t> vinfo;
   static constexpr uint8_t kCutsKnown = 1, kCuts = 2, kPlainKnown = 4, kPlain = 8;
+  bool deferred = false;  // classified in level_done (a level that refines nothing)
 };
 
 // Appends to a CSR of vertex sets (values, offsets) the sorted union of `from`'s sets of the
@@ -311,8 +312,12 @@ class Builder {
           PatchHierarchy* h = nullptr)
       : cage_(cage), o_(o), depth_(depth), h_(h) {}
 
+  /// Decides which of level k's faces to refine (refine_sparse's request).
   void request(size_t k, const SparseLevel& S, const LevelAdjacency& adj,
                std::vector<uint8_t>& requested);
+  /// Emits level k's patches, once refine_sparse has built the level's stencils and dropped
+  /// level k - 1 (its level_done): only one level's topology is held while the table grows.
+  void level_done(size_t k, const SparseLevel& S, const LevelAdjacency& adj);
   void build(PatchTable& out, SparseRefinement& r, PatchStats* stats);
   void set_stats(PatchStats* stats) { stats_ = stats; }
   /// Region builds: the role of each cage face (see Level::role).
@@ -329,6 +334,9 @@ class Builder {
   };
   SharpEdges sharp_edges(const Level& L, uint32_t v) const;
   bool cuts_at_inf_sharp(const Level& L, const RefinedLevel& R, uint32_t v) const;
+  // Level k's corner table, tags, single creases and (requested non-null) requests.
+  void classify(size_t k, const SparseLevel& S, const LevelAdjacency& adj,
+                std::vector<uint8_t>* requested);
   bool regular_vertex(Level& L, const RefinedLevel& R, uint32_t v) const;
   bool regular_vertex_inf(Level& L, const RefinedLevel& R, uint32_t v) const;
   int single_crease(Level& L, const RefinedLevel& R, uint32_t f, float& sharpness) const;
@@ -660,10 +668,6 @@ void Builder::request(size_t k, const SparseLevel& S, const LevelAdjacency& adj,
   const RefinedLevel& R = S.level;
   const size_t nv = R.vertex_count(), nf = R.face_count();
   Level& L = levels_.emplace_back();
-  L.topo = make_topo(R, adj);
-  const Topo& t = L.topo;
-  L.corner_sharpness = {adj.corner_edge, R.edge_sharpness.data()};
-  L.vinfo.assign(nv, 0);
 
   // Depth wanted around each vertex.
   L.rem.assign(nv, 0);
@@ -734,6 +738,44 @@ void Builder::request(size_t k, const SparseLevel& S, const LevelAdjacency& adj,
       for (uint32_t f = 0; f < nf; ++f) L.role[f] = levels_[k - 1].role[S.face_parent[f]];
     }
   }
+  L.level = &R;
+  if (h_) {  // where each vertex's depth comes from: itself, or what it was made from
+    L.src_offsets.assign(1, 0);
+    if (k == 0) {
+      for (uint32_t v = 0; v < nv; ++v) L.src.push_back(v), L.src_offsets.push_back(v + 1);
+    } else {
+      const Level& P = levels_[k - 1];
+      const RefinedLevel& PR = *P.level;
+      for (uint32_t f : S.parent_faces)
+        append_union(L.src, L.src_offsets, P,
+                     std::span(PR.face_vertices.data() + PR.face_offsets[f],
+                               PR.face_offsets[f + 1] - PR.face_offsets[f]));
+      for (uint32_t e : S.parent_edges)
+        append_union(L.src, L.src_offsets, P,
+                     std::span(PR.edge_vertices.data() + 2 * size_t(e), 2));
+      for (uint32_t v : S.parent_vertices) append_union(L.src, L.src_offsets, P, std::span(&v, 1));
+    }
+  }
+  // A level where no vertex wants more depth refines nothing (faces are forced only at the
+  // cage): its corner table, rings and tags wait for level_done, when level k - 1 is gone.
+  L.deferred = k > 0 && std::all_of(L.rem.begin(), L.rem.end(), [](uint8_t d) { return d == 0; });
+  if (!L.deferred) classify(k, S, adj, &requested);
+  // Level k - 1 has given level k what it needs (depths, placement, sources).
+  if (k > 0) {
+    Level& P = levels_[k - 1];
+    P.rem = {}, P.requested = {}, P.param = {}, P.src = {}, P.src_offsets = {}, P.role = {};
+  }
+}
+
+void Builder::classify(size_t k, const SparseLevel& S, const LevelAdjacency& adj,
+                       std::vector<uint8_t>* requested) {
+  const RefinedLevel& R = S.level;
+  const size_t nv = R.vertex_count(), nf = R.face_count();
+  Level& L = levels_[k];
+  L.topo = make_topo(R, adj);
+  const Topo& t = L.topo;
+  L.corner_sharpness = {adj.corner_edge, R.edge_sharpness.data()};
+  L.vinfo.assign(nv, 0);
   // Irregular corners of covered faces; a face is refined while one of them wants depth.
   L.irregular.assign(nv, 0);
   std::vector<uint8_t> seen(nv, 0);
@@ -773,37 +815,20 @@ void Builder::request(size_t k, const SparseLevel& S, const LevelAdjacency& adj,
     }
     L.force[f] = force;
     L.requested[f] = (want || force) && k < size_t(kMaxDepth) && (L.role.empty() || L.role[f]);
-    requested[f] = L.requested[f];
+    if (requested) (*requested)[f] = L.requested[f];
   }
-  L.level = &R;
-  if (h_) {  // where each vertex's depth comes from: itself, or what it was made from
-    L.src_offsets.assign(1, 0);
-    if (k == 0) {
-      for (uint32_t v = 0; v < nv; ++v) L.src.push_back(v), L.src_offsets.push_back(v + 1);
-    } else {
-      const Level& P = levels_[k - 1];
-      const RefinedLevel& PR = *P.level;
-      for (uint32_t f : S.parent_faces)
-        append_union(L.src, L.src_offsets, P,
-                     std::span(PR.face_vertices.data() + PR.face_offsets[f],
-                               PR.face_offsets[f + 1] - PR.face_offsets[f]));
-      for (uint32_t e : S.parent_edges)
-        append_union(L.src, L.src_offsets, P,
-                     std::span(PR.edge_vertices.data() + 2 * size_t(e), 2));
-      for (uint32_t v : S.parent_vertices) append_union(L.src, L.src_offsets, P, std::span(&v, 1));
-    }
-  }
+}
+
+void Builder::level_done(size_t k, const SparseLevel& S, const LevelAdjacency& adj) {
+  if (levels_[k].deferred) classify(k, S, adj, nullptr);
   emit(k, S);
   // What the next level needs stays (depths, requests, placement, sources); the rest goes.
+  Level& L = levels_[k];
   L.topo = {};
   L.ring_slot = {}, L.ring_edge = {}, L.ring_diag = {}, L.ring_face = {};
   L.vinfo = {};
   L.corner_sharpness = {}, L.irregular = {}, L.owned = {}, L.crease_edge = {};
   L.crease_sharpness = {}, L.force = {};
-  if (k > 0) {
-    Level& P = levels_[k - 1];
-    P.rem = {}, P.requested = {}, P.param = {}, P.src = {}, P.src_offsets = {}, P.role = {};
-  }
 }
 
 void GregoryCap::finish_topology(uint32_t first, uint32_t count) {
@@ -1441,7 +1466,8 @@ SparseRefinement isolate(const Mesh& cage, const PatchOptions& options, Builder&
       [&](size_t k, const SparseLevel& S, const LevelAdjacency& a, std::vector<uint8_t>& req) {
         b.request(k, S, a, req);
       },
-      false);
+      false,
+      [&](size_t k, const SparseLevel& S, const LevelAdjacency& a) { b.level_done(k, S, a); });
 }
 
 }  // namespace

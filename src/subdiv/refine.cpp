@@ -1495,7 +1495,8 @@ namespace {
 constexpr int kMaxSparseDepth = 16;
 SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& options,
                                     const SparseRequest& request, std::vector<uint8_t> vertex_depth,
-                                    std::vector<uint8_t> face_depth, bool keep_levels);
+                                    std::vector<uint8_t> face_depth, bool keep_levels,
+                                    const SparseLevelDone& level_done);
 }  // namespace
 
 SparseRefinement refine_sparse(const Mesh& cage, std::span<const uint8_t> vertex_depth,
@@ -1528,19 +1529,21 @@ SparseRefinement refine_sparse(const Mesh& cage, std::span<const uint8_t> vertex
       requested[f] = want;
     }
   };
-  return refine_sparse_impl(cage, options, request, std::move(vd), std::move(fd), true);
+  return refine_sparse_impl(cage, options, request, std::move(vd), std::move(fd), true, {});
 }
 
 SparseRefinement refine_sparse(const Mesh& cage, const SubdivOptions& options,
-                               const SparseRequest& request, bool keep_levels) {
+                               const SparseRequest& request, bool keep_levels,
+                               const SparseLevelDone& level_done) {
   return refine_sparse_impl(cage, options, request, std::vector<uint8_t>(cage.vertex_count(), 0),
-                            std::vector<uint8_t>(cage.face_count(), 0), keep_levels);
+                            std::vector<uint8_t>(cage.face_count(), 0), keep_levels, level_done);
 }
 
 namespace {
 SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& options,
                                     const SparseRequest& request, std::vector<uint8_t> vertex_depth,
-                                    std::vector<uint8_t> face_depth, bool keep_levels) {
+                                    std::vector<uint8_t> face_depth, bool keep_levels,
+                                    const SparseLevelDone& level_done) {
   SparseRefinement r;
   r.options = options;
   r.levels.reserve(kMaxSparseDepth + 1);
@@ -1612,6 +1615,7 @@ SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& optio
       padj.reset();
       psel = Selection{};
     }
+    if (level_done) level_done(k, P, view);
     if (!any) {
       if (!keep_levels) r.levels[k] = SparseLevel{};
       break;

@@ -192,8 +192,15 @@ using SparseRequest =
 /// points within one ring of the children of the faces requested at level k-1 or of the faces
 /// refined from level k (what such a caller and the next level's stencils can read); the other
 /// rows are empty.
+/// `level_done` (optional) is called once per level, after `request` and after the level's
+/// stencils are built (lean runs: and level k-1 dropped), with the level and its adjacency: a
+/// caller that only reads a level (patch tables emit their patches there) then holds one
+/// level's topology instead of two.
+using SparseLevelDone =
+    std::function<void(size_t level, const SparseLevel& level_so_far, const LevelAdjacency&)>;
 SparseRefinement refine_sparse(const Mesh& cage, const SubdivOptions& options,
-                               const SparseRequest& request, bool keep_levels = true);
+                               const SparseRequest& request, bool keep_levels = true,
+                               const SparseLevelDone& level_done = {});
 
 /// Counts and timings of a lean uniform subdivision (subdivide_uniform).
 struct SubdivideStats {
