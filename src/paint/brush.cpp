@@ -6,6 +6,7 @@
 #include <bit>
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -283,12 +284,17 @@ struct StrokePainter::State : LeafPainter {
   // With reuse on, per memo (a brick's leaf, see LeafPainter::paint): the cell's tag and per
   // side the nearest surface point to the cell's centre and its normal, which depend on nothing
   // else once the refiner gives the cell a memo.
+  // Trivial, so memo slots are made without being zero-filled: a stroke's memos number its
+  // bricks' leaves (tens of thousands), and filling them was 3% of a dab. q and nq of a side
+  // are written, and read, only where `has` has the side's bit.
   struct Near {
-    uint8_t known = 0, tag = 0, has = 0;  // has: bit side, a triangle on that side
-    V3 q[2], nq[2];
+    uint8_t tag, has;  // has: bit side, a triangle on that side
+    float q[2][3], nq[2][3];
   };
   bool reuse = false;
-  std::vector<Near> nears;
+  static constexpr size_t kNearChunk = 4096;
+  std::vector<uint8_t> near_known;                  // per memo: its slot holds the cell's tag's
+  std::vector<std::unique_ptr<Near[]>> near_slots;  // chunks of kNearChunk, never moved
 
   // The nearest point to the cell's centre on the cell's triangles of each side.
   void nearest(const CellBox& box, const LeafCell& cell, std::span<const uint32_t> cell_tris,
@@ -302,12 +308,16 @@ struct StrokePainter::State : LeafPainter {
                                        v3(surf.corner(t, 2)));
       const V3 d = p - box.c;
       const float d2 = dot(d, d);
-      if (d2 < best[side]) best[side] = d2, e.q[side] = p, arg[side] = t;
+      if (d2 < best[side])
+        best[side] = d2, e.q[side][0] = p.x, e.q[side][1] = p.y, e.q[side][2] = p.z, arg[side] = t;
     }
     e.has = 0;
     for (int side = 0; side < 2; ++side)
-      if (best[side] != INFINITY)
-        e.has = uint8_t(e.has | 1 << side), e.nq[side] = v3(surf.normal(arg[side]));
+      if (best[side] != INFINITY) {
+        e.has = uint8_t(e.has | 1 << side);
+        const float* n = surf.normal(arg[side]);
+        e.nq[side][0] = n[0], e.nq[side][1] = n[1], e.nq[side][2] = n[2];
+      }
   }
 
   // The last 4x4x4 block paint() keyed (any cell of it, its level) and its key bits.
@@ -320,11 +330,15 @@ struct StrokePainter::State : LeafPainter {
     Near local;
     const Near* e = &local;
     if (reuse && memo != kNoMemo) {
-      if (memo >= nears.size()) nears.resize(std::max<size_t>(size_t(memo) + 1, 2 * nears.size()));
-      Near& kept = nears[memo];
-      if (!kept.known || kept.tag != cell.tag) {
+      if (memo >= near_known.size())
+        near_known.resize(std::max<size_t>(size_t(memo) + 1, 2 * near_known.size()), 0);
+      const size_t chunk = memo / kNearChunk;
+      if (chunk >= near_slots.size()) near_slots.resize(chunk + 1);
+      if (!near_slots[chunk]) near_slots[chunk].reset(new Near[kNearChunk]);
+      Near& kept = near_slots[chunk][memo % kNearChunk];
+      if (!near_known[memo] || kept.tag != cell.tag) {
         nearest(box, cell, cell_tris, kept);
-        kept.known = 1, kept.tag = cell.tag;
+        near_known[memo] = 1, kept.tag = cell.tag;
       }
       e = &kept;
     } else {
@@ -344,7 +358,7 @@ struct StrokePainter::State : LeafPainter {
       if (side == 1 && !cell.dbl) cell.dbl = true, cell.s[1] = tex.background();
       V3 o, dir;
       float len;
-      const float w = weight(e->q[side], e->nq[side], box.h, o, dir, len);
+      const float w = weight(v3(e->q[side]), v3(e->nq[side]), box.h, o, dir, len);
       if (!(w > 0)) continue;
       const uint64_t key = cell_key | uint64_t(side) << 53;
       // A texel this stroke already gave as much changes whatever the ray finds: no ray.
