@@ -318,6 +318,20 @@ bool Refiner::try_compact(const GeneralNode& n, Brick& out) const {
   return true;
 }
 
+namespace {
+
+// Whether two bricks hold the same cells (what encode_brick stores, less the average).
+bool same_cells(const Brick& a, const Brick& b) {
+  if (a.mask != b.mask || a.dbl != b.dbl) return false;
+  for (uint64_t m = a.mask; m; m &= m - 1) {
+    const LeafCell &x = a.cell[std::countr_zero(m)], &y = b.cell[std::countr_zero(m)];
+    if (x.tag != y.tag || x.dbl != y.dbl || x.s[0] != y.s[0] || x.s[1] != y.s[1]) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
 void Refiner::visit_brick(Brick& b, const CellBox& bb, std::span<const uint32_t> tris) {
   Split &p1 = brick1_, &p2 = brick2_;
   // Only children meeting the region are visited: only they are split.
@@ -359,7 +373,6 @@ void Refiner::visit_brick(Brick& b, const CellBox& bb, std::span<const uint32_t>
                      std::span<const uint32_t>(kept_tris_.data() + kept->off[m], kept->len[m]));
       }
       if (painter_) painter_->flush();
-      b.avg = brick_avg(b);
       return;
     }
   }
@@ -382,7 +395,6 @@ void Refiner::visit_brick(Brick& b, const CellBox& bb, std::span<const uint32_t>
   }
   if (kept) kept->known |= want;
   if (painter_) painter_->flush();
-  b.avg = brick_avg(b);
 }
 
 void Refiner::visit_general(GeneralNode& n, const CellBox& nb, std::span<const uint32_t> tris,
@@ -477,8 +489,15 @@ void Refiner::visit_general(GeneralNode& n, const CellBox& nb, std::span<const u
           n.kind[c] = CellKind::general;
           store_general(g, 0, 0, n.ptr[c], n.info[c]);
         } else {
+          // A brick the visit leaves as it was (its texels already as strong from an earlier
+          // dab of the stroke, or out of the brush's reach) is not averaged, encoded and
+          // written again: the same words would come out.
+          const Brick before = b;
           visit_brick(b, cb, tc);
-          n.ptr[c] = store_brick(b, n.ptr[c]);
+          if (!same_cells(before, b)) {
+            b.avg = brick_avg(b);
+            n.ptr[c] = store_brick(b, n.ptr[c]);
+          }
         }
         break;
       }

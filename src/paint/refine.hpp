@@ -122,6 +122,7 @@ class Refiner {
   /// node's scratch already holds full split by child (`full_parts`), as refine_leaf left it.
   void visit_general(GeneralNode& n, const CellBox& nb, std::span<const uint32_t> tris,
                      const std::vector<uint32_t>* full = nullptr);
+  /// Paints b's leaves in the region; b.avg is left for the caller (stale if a cell changed).
   void visit_brick(Brick& b, const CellBox& bb, std::span<const uint32_t> tris);
   /// A new general node for the leaf cell `cb` (refined one level); leaves full split by child
   /// in cb's scratch (`full_parts`).
