@@ -85,9 +85,28 @@ class Refiner {
   /// The same with b's children already at hand (`kids`, as children() gives them).
   void split(std::span<const uint32_t> in, const CellBox& b, const CellBox kids[8], Split& out,
              uint32_t want = 0xffu) const;
-  /// The 8 children of a box.
+  /// The 8 children of a box: child(b, c) for each c, with each of the 6 distinct coordinates
+  /// computed once (box()'s formula) instead of 24 times.
   void children(const CellBox& b, CellBox kids[8]) const {
-    for (int c = 0; c < 8; ++c) kids[c] = child(b, c);
+    const int level = b.level + 1;
+    const double s = level <= octree::kMaxDepth
+                         ? scale_[size_t(level)]
+                         : double(ed_.texture().size()) / double(1u << level);
+    const uint32_t x = 2 * b.x, y = 2 * b.y, z = 2 * b.z;
+    float cx[2], cy[2], cz[2];
+    for (uint32_t i = 0; i < 2; ++i) {
+      cx[i] = float(origin_[0] + (double(x + i) + 0.5) * s);
+      cy[i] = float(origin_[1] + (double(y + i) + 0.5) * s);
+      cz[i] = float(origin_[2] + (double(z + i) + 0.5) * s);
+    }
+    const float h = float(0.5 * s);
+    for (int c = 0; c < 8; ++c) {
+      const uint32_t i = uint32_t(c & 1), j = uint32_t(c >> 1 & 1), k = uint32_t(c >> 2 & 1);
+      CellBox& o = kids[c];
+      o.level = level, o.x = x + i, o.y = y + j, o.z = z + k;
+      o.c = {cx[i], cy[j], cz[k]};
+      o.h = h;
+    }
   }
   /// Child c of a box.
   CellBox child(const CellBox& b, int c) const {
