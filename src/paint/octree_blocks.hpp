@@ -75,14 +75,6 @@ Brick decode_brick(std::span<const uint32_t> pool, uint32_t word);
 /// Encodes a brick into `out`; returns the double flag to or into the brick word.
 uint32_t encode_brick(const Brick& b, std::vector<uint32_t>& out);
 
-/// std::lround(255 v) for v in [0, 1], without the library call (dabs blend thousands of
-/// texels): u - r is exact for u in [0, 255], so ties go up, away from zero, as lround's do.
-inline uint32_t unit_to_byte(float v) {
-  const float u = v * 255.0f;
-  const uint32_t r = uint32_t(u);
-  return r + uint32_t(u - float(r) >= 0.5f);
-}
-
 /// std::clamp(std::lround(v), 0, 255) for v >= 0 (not NaN), without the library call (means are
 /// taken per brick and per node on every dab): v - r is exact below 2^52, so ties go up, away
 /// from zero, as lround's do.

@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <random>
 
 #include "../../src/paint/geometry.hpp"
@@ -76,15 +78,30 @@ TEST(PaintGeometry, ByteRoundingEqualsLround) {
   };
   auto check = [&](float v) {
     const float in[4] = {v, v, v, v};
-    ASSERT_EQ(channel(rgba8_from_float(in), 0), ref(v)) << v;
+    const Rgba8 c = rgba8_from_float(in);
+    for (int k = 0; k < 4; ++k) ASSERT_EQ(channel(c, k), ref(v)) << v << " channel " << k;
   };
   for (uint32_t i = 0; i <= (1u << 20); ++i) check(float(i) / float(1u << 20));
   for (int k = 0; k < 255; ++k) {
     const float tie = (float(k) + 0.5f) / 255.0f;
     check(tie), check(std::nextafter(tie, 0.0f)), check(std::nextafter(tie, 1.0f));
   }
-  check(-1.0f), check(2.0f), check(NAN), check(INFINITY);
+  check(-1.0f), check(2.0f), check(NAN), check(INFINITY), check(-INFINITY), check(-0.0f);
+  check(std::numeric_limits<float>::max()), check(-std::numeric_limits<float>::max());
+  check(std::numeric_limits<float>::denorm_min()), check(std::nextafter(1.0f, 2.0f));
   std::mt19937_64 rng(3);
+  for (int i = 0; i < 1000000; ++i) {  // any float bits: every sign, exponent and NaN
+    const uint32_t bits = uint32_t(rng());
+    float v;
+    std::memcpy(&v, &bits, sizeof v);
+    check(v);
+  }
+  std::uniform_real_distribution<float> near_unit(-0.5f, 1.5f);
+  for (int i = 0; i < 100000; ++i) {  // different values in the four channels
+    const float in[4] = {near_unit(rng), near_unit(rng), near_unit(rng), near_unit(rng)};
+    const Rgba8 c = rgba8_from_float(in);
+    for (int k = 0; k < 4; ++k) ASSERT_EQ(channel(c, k), ref(in[k])) << in[k];
+  }
   std::uniform_real_distribution<double> u(0, 255);
   for (int i = 0; i < 1000000; ++i) {
     const double v = i < 256 ? double(i) + 0.5 : u(rng);
