@@ -97,10 +97,10 @@ int side_for_normal(int tag, const float* n) {
 namespace detail {
 
 Rgba8 ColorMean::mean() const {
-  if (n_ <= 0) return 0;
-  const double a = a_ / n_;
-  if (a <= 0) return 0;
-  return pack_rgba8(round_byte(r_ / a_), round_byte(g_ / a_), round_byte(b_ / a_), round_byte(a));
+  if (n_ == 0 || a_ == 0) return 0;
+  const double a = double(a_);
+  return pack_rgba8(round_byte(double(r_) / a), round_byte(double(g_) / a),
+                    round_byte(double(b_) / a), round_byte(a / double(n_)));
 }
 
 GeneralNode decode_general(std::span<const uint32_t> pool, uint32_t ptr, uint32_t info) {

@@ -87,20 +87,17 @@ inline uint32_t round_byte(double v) {
 /// Premultiplied mean of colours (equal weights), back to straight RGBA8. 0 for none.
 class ColorMean {
  public:
+  // Integer sums (exact, as the double sums they replace were: every term is an integer below
+  // 2^16), turned to doubles only in mean().
   void add(Rgba8 c) {
-    const double a = channel(c, 3);
+    const uint32_t a = channel(c, 3);
     r_ += channel(c, 0) * a, g_ += channel(c, 1) * a, b_ += channel(c, 2) * a, a_ += a;
     ++n_;
-  }
-  void add_weighted(Rgba8 c, double w) {
-    const double a = channel(c, 3) * w;
-    r_ += channel(c, 0) * a, g_ += channel(c, 1) * a, b_ += channel(c, 2) * a, a_ += a;
-    n_ += w;
   }
   Rgba8 mean() const;
 
  private:
-  double r_ = 0, g_ = 0, b_ = 0, a_ = 0, n_ = 0;
+  uint64_t r_ = 0, g_ = 0, b_ = 0, a_ = 0, n_ = 0;
 };
 
 /// The mip average of a leaf cell (both sides of a double cell).
