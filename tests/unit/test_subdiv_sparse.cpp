@@ -300,6 +300,38 @@ TEST(Sparse, NothingRequestedIsTheCage) {
   EXPECT_TRUE(sr.stencils.empty());
 }
 
+TEST(Sparse, LevelDoneFollowsEachRequestWithTheSameLevel) {
+  // A lean run (levels dropped as it goes) refining everything twice: level_done(k) comes after
+  // request(k) and before request(k + 1), once per level, the last one included, with the
+  // level request(k) saw and that level's own adjacency.
+  const Mesh cage = make_shape("cage");
+  std::vector<std::string> events;
+  std::vector<size_t> faces_seen;
+  const SparseRefinement sr = refine_sparse(
+      cage, subdiv_options(cage),
+      [&](size_t k, const SparseLevel& S, const LevelAdjacency&, std::vector<uint8_t>& req) {
+        events.push_back("request " + std::to_string(k));
+        faces_seen.push_back(S.level.face_count());
+        if (k < 2) std::fill(req.begin(), req.end(), uint8_t(1));
+      },
+      false,
+      [&](size_t k, const SparseLevel& S, const LevelAdjacency& a) {
+        events.push_back("done " + std::to_string(k));
+        ASSERT_LT(k, faces_seen.size());
+        EXPECT_EQ(S.level.face_count(), faces_seen[k]);
+        EXPECT_EQ(a.vertex_corner_offsets.size(), S.level.vertex_count() + 1);
+        EXPECT_EQ(a.corner_edge.size(), S.level.face_vertices.size());
+        EXPECT_EQ(a.edge_corner_offsets.size(), S.level.edge_count() + 1);
+      });
+  const std::vector<std::string> want = {"request 0", "done 0",    "request 1",
+                                         "done 1",    "request 2", "done 2"};
+  EXPECT_EQ(events, want);
+  EXPECT_EQ(sr.stencils.size(), 2u);
+  const UniformRefinement ur = refine_uniform(cage, 2, subdiv_options(cage));
+  ASSERT_EQ(faces_seen.size(), 3u);
+  for (size_t k = 0; k < 3; ++k) EXPECT_EQ(faces_seen[k], ur.levels[k].face_count()) << k;
+}
+
 TEST(Sparse, EverythingRequestedIsUniform) {
   // Local numbering may differ from the uniform levels' (edges come from another table), so
   // compare the point sets: the same points, as many faces.
