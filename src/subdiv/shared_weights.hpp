@@ -25,6 +25,13 @@ class SharedWeights {
 
  private:
   [[gnu::noinline]] uint32_t add_other(std::vector<float>& pool, const float* w, uint32_t n) {
+    // Then a row seen lately with the same size and first weight (end caps cycle through a
+    // few rows of each kind, which the last row alone misses).
+    uint32_t first = 0;
+    if (n) std::memcpy(&first, w, sizeof first);
+    Recent& r = recent_[((first ^ n) * 0x9E3779B1u) >> (32 - kRecentBits)];
+    if (r.size == n && equal(pool.data() + r.at, w, n)) return remember(r.at, n);
+    r.size = UINT32_MAX;  // refilled below
     pool_ = &pool;
     const uint64_t h = hash(w, n);
     const uint32_t key = uint32_t(h >> 32) | 1u;  // 0 marks an empty slot
@@ -35,10 +42,13 @@ class SharedWeights {
         slot = {key, n, uint32_t(pool.size())};
         pool.insert(pool.end(), w, w + n);
         if (2 * ++used_ > slots_.size()) grow();
-        return remember(uint32_t(pool.size() - n), n);
+        r = {uint32_t(pool.size() - n), n};
+        return remember(r.at, n);
       }
-      if (slot.key == key && slot.size == n && equal(pool.data() + slot.at, w, n))
+      if (slot.key == key && slot.size == n && equal(pool.data() + slot.at, w, n)) {
+        r = {slot.at, n};
         return remember(slot.at, n);
+      }
     }
   }
 
@@ -87,6 +97,11 @@ class SharedWeights {
   std::vector<Slot> slots_;
   size_t used_ = 0;
   uint32_t last_at_ = 0, last_size_ = UINT32_MAX;  // the previous row
+  struct Recent {
+    uint32_t at = 0, size = UINT32_MAX;
+  };
+  static constexpr int kRecentBits = 5;
+  Recent recent_[1 << kRecentBits];  // by size and first weight: the latest such row
 };
 
 }  // namespace limn::detail
