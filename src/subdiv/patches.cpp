@@ -979,10 +979,11 @@ uint32_t GregoryCap::emit_face_point(int i, bool plus, uint32_t p_row, uint32_t 
                                      detail::SharedWeights& shared) const {
   const Corner& k = c[i];
   const int far = plus ? (i + 1) & 3 : (i + 3) & 3;
-  float row[8];  // at most 3 corner points and 4 ring points
+  uint32_t ids[8];  // at most 3 corner points and 4 ring points
+  float row[8];
   uint32_t terms = 0;
   auto put = [&](uint32_t id, double w) {
-    if (w != 0.0) table.indices.push_back(id), row[terms++] = float(w);
+    if (w != 0.0) ids[terms] = id, row[terms++] = float(w);
   };
   if (plus ? k.fp_regular : k.fm_regular) {
     put(k.v, 4.0 / 9.0), put(c[(i + 3) & 3].v, 2.0 / 9.0), put(c[(i + 1) & 3].v, 2.0 / 9.0);
@@ -1001,6 +1002,7 @@ uint32_t GregoryCap::emit_face_point(int i, bool plus, uint32_t p_row, uint32_t 
     put(k.ring[2 * size_t(edge) + 1], sign / 18.0);
     put(k.ring[2 * size_t(next)], sign / 9.0);
   }
+  table.indices.insert(table.indices.end(), ids, ids + terms);
   table.weight_offsets.push_back(shared.add(table.weights, row, terms));
   table.offsets.push_back(uint32_t(table.indices.size()));
   return uint32_t(table.size() - 1);
@@ -1255,9 +1257,12 @@ void Builder::emit(size_t k, const SparseLevel& S) {
           cc.faces = int(g.face.size());
           cc.face_in_ring = int(std::find(g.face.begin(), g.face.end(), f) - g.face.begin());
           cc.boundary = g.boundary;
+          // Written in place (ring keeps its room from cap to cap; reset() clears it).
+          const size_t nr = 2 * g.face.size() + (g.boundary ? 1 : 0);
+          cc.ring.resize(nr);
           for (size_t m = 0; m < g.face.size(); ++m)
-            cc.ring.push_back(off + g.edge_end[m]), cc.ring.push_back(off + g.diagonal[m]);
-          if (g.boundary) cc.ring.push_back(off + g.edge_end.back());
+            cc.ring[2 * m] = off + g.edge_end[m], cc.ring[2 * m + 1] = off + g.diagonal[m];
+          if (g.boundary) cc.ring[nr - 1] = off + g.edge_end.back();
         }
         cap.finish_topology(off, uint32_t(R.vertex_count()));
         uint32_t ids[20];
