@@ -1604,6 +1604,14 @@ SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& optio
           keep[q[0]] |= 2, keep[q[1]] |= 2, keep[q[2]] |= 2, keep[q[3]] |= 2;
       }
       for (uint8_t& x : keep) x >>= 1;
+      if (!any) {
+        // The last level: what only the next level's construction would read goes before its
+        // stencils are built (the moment both levels and the new table are held).
+        Ids().swap(adj->veo), Ids().swap(adj->ve);
+        std::vector<uint32_t>().swap(P.level.edge_vertices);
+        for (auto* v : {&P.vertex_complete, &P.vertex_depth, &P.face_depth, &P.face_refined})
+          std::vector<uint8_t>().swap(*v);
+      }
       // Level k holds the selection's lists (as its parent_*): lent to psel, not copied.
       psel.faces.swap(P.parent_faces), psel.edges.swap(P.parent_edges);
       psel.vertices.swap(P.parent_vertices);
@@ -1615,6 +1623,9 @@ SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& optio
       padj.reset();
       psel = Selection{};
     }
+    if (!any && !keep_levels)  // the last level's provenance, read by its stencils only
+      for (auto* v : {&P.parent_faces, &P.parent_edges, &P.parent_vertices})
+        std::vector<uint32_t>().swap(*v);
     if (level_done) level_done(k, P, view);
     if (!any) {
       if (!keep_levels) r.levels[k] = SparseLevel{};
