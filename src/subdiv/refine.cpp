@@ -805,11 +805,13 @@ StencilTable build_stencils(const SubdivOptions& o, const RefinedLevel& P, const
                             const Selection& sel, const uint8_t* keep = nullptr) {
   const size_t n = sel.points();
   StencilTable out;
-  std::vector<float> w;  // a row's weights before they are shared
-  auto share = [&](detail::SharedWeights& pool, const Rules& rules, uint32_t* indices, size_t k) {
-    if (w.size() < k) w.resize(std::max(k, size_t(64)));
-    rules.write(indices, w.data());
-    return pool.add(out.weights, w.data(), uint32_t(k));
+  // Writes the computed row's k indices to `indices` and its weights to `pool` (through
+  // `shared`, `row` holding them first); returns where they start in the pool.
+  auto write_row = [](const Rules& rules, size_t k, uint32_t* indices, std::vector<float>& row,
+                      detail::SharedWeights& shared, std::vector<float>& pool) {
+    if (row.size() < k) row.resize(std::max(k, size_t(64)));
+    rules.write(indices, row.data());
+    return shared.add(pool, row.data(), uint32_t(k));
   };
   if (n < 4 * kStencilChunk) {  // small: one serial pass, writing in place
     // Room reserved for the usual 4-9 terms a point (only address space: pages are touched as
@@ -822,7 +824,8 @@ StencilTable build_stencils(const SubdivOptions& o, const RefinedLevel& P, const
     constexpr size_t kStep = 4096;
     size_t used = 0;
     Rules rules(o, P, a, sel);
-    detail::SharedWeights pool;
+    detail::SharedWeights shared;
+    std::vector<float> row;
     for (size_t i = 0; i < n; ++i) {
       if (keep && !keep[i]) {
         out.offsets[i + 1] = uint32_t(used);
@@ -831,7 +834,8 @@ StencilTable build_stencils(const SubdivOptions& o, const RefinedLevel& P, const
       const size_t k = rules.compute(i);
       if (used + k > out.indices.size())
         out.indices.resize(std::max(used + k, out.indices.size() + kStep));
-      out.weight_offsets[i] = share(pool, rules, out.indices.data() + used, k);
+      out.weight_offsets[i] =
+          write_row(rules, k, out.indices.data() + used, row, shared, out.weights);
       used += k;
       if (used > UINT32_MAX)
         throw InputError("refinement level needs more than 2^32 stencil entries");
@@ -861,14 +865,13 @@ StencilTable build_stencils(const SubdivOptions& o, const RefinedLevel& P, const
   std::vector<std::vector<float>> pools(chunks);
   tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
     Rules rules(o, P, a, sel);
-    detail::SharedWeights pool;
+    detail::SharedWeights shared;
     std::vector<float> row;
     for (size_t i = c * kStencilChunk, e = std::min(n, i + kStencilChunk); i < e; ++i) {
       if (keep && !keep[i]) continue;
       const size_t k = rules.compute(i);
-      if (row.size() < k) row.resize(std::max(k, size_t(64)));
-      rules.write(out.indices.data() + out.offsets[i], row.data());
-      out.weight_offsets[i] = pool.add(pools[c], row.data(), uint32_t(k));
+      out.weight_offsets[i] =
+          write_row(rules, k, out.indices.data() + out.offsets[i], row, shared, pools[c]);
     }
   });
   std::vector<uint32_t> base(chunks + 1, 0);
