@@ -83,6 +83,12 @@ inline bool tri_inside_box(V3 c, float h, V3 a, V3 b, V3 d, float slack) {
          std::fabs(v2.x) <= m && std::fabs(v2.y) <= m && std::fabs(v2.z) <= m;
 }
 
+// Whether a triangle meets a box as the paint layer decides it everywhere (cell lists, box
+// queries, splits): the quick containment test, else the separating-axis test.
+inline bool tri_meets_box(V3 c, float h, V3 a, V3 b, V3 d, float slack) {
+  return tri_inside_box(c, h, a, b, d, slack) || tri_box_overlap(c, h, a, b, d, slack);
+}
+
 // tri_box_overlap against 8 boxes of one half size h at once (centres cx[k], cy[k], cz[k]): bit k
 // set when tri_box_overlap(box k) is true. Lane by lane the same float operations in the same
 // order, so the same answers; the edge axes' zero components are left out (each adds a signed

@@ -88,15 +88,11 @@ inline uint32_t octant(uint32_t x, uint32_t y, uint32_t z, int shift) {
   return (x >> shift & 1u) | (y >> shift & 1u) << 1 | (z >> shift & 1u) << 2;
 }
 
+// The mip means' premultiplied mean (the same sums and rounding as the refiner's averages).
 Rgba8 premul_mean(const uint32_t* s, size_t count) {
-  double r = 0, g = 0, b = 0, a = 0;
-  for (size_t i = 0; i < count; ++i) {
-    const double al = channel(s[i], 3);
-    r += channel(s[i], 0) * al, g += channel(s[i], 1) * al, b += channel(s[i], 2) * al, a += al;
-  }
-  if (a <= 0) return 0;
-  return pack_rgba8(detail::round_byte(r / a), detail::round_byte(g / a), detail::round_byte(b / a),
-                    detail::round_byte(a / double(count)));
+  detail::ColorMean m;
+  for (size_t i = 0; i < count; ++i) m.add(s[i]);
+  return m.mean();
 }
 
 // The walk itself, written once and compiled twice: for CPUs with AVX2's integer set (popcnt,

@@ -42,9 +42,7 @@ void Refiner::filter(std::span<const uint32_t> in, const CellBox& b,
   out.clear();
   for (uint32_t t : in) {
     const V3 p0 = v3(s_.corner(t, 0)), p1 = v3(s_.corner(t, 1)), p2 = v3(s_.corner(t, 2));
-    if (tri_inside_box(b.c, b.h, p0, p1, p2, slack_) ||
-        tri_box_overlap(b.c, b.h, p0, p1, p2, slack_))
-      out.push_back(t);
+    if (tri_meets_box(b.c, b.h, p0, p1, p2, slack_)) out.push_back(t);
   }
 }
 
@@ -74,6 +72,8 @@ __attribute__((always_inline)) inline void split_loop(const PaintSurface& s,
     if (!(hit & (hit - 1))) {
       const int k = std::countr_zero(hit);
       const V3 kc = {kx[k], ky[k], kz[k]};
+      // tri_meets_box written out: through the wrapper GCC inlines the whole scalar test into
+      // this AVX2 loop, which costs the dab 0.5% more instructions.
       if (!tri_inside_box(kc, kh, p0, p1, p2, slack) && !tri_box_overlap(kc, kh, p0, p1, p2, slack))
         continue;
     } else {

@@ -65,12 +65,8 @@ class Refiner {
   CellBox box(int level, uint32_t x, uint32_t y, uint32_t z) const {
     CellBox b;
     b.level = level, b.x = x, b.y = y, b.z = z;
-    // The cell size divided out once per level (the same quotient).
-    const double s = level >= 0 && level <= octree::kMaxDepth
-                         ? scale_[size_t(level)]
-                         : double(ed_.texture().size()) / double(1u << level);
-    b.c = {float(origin_[0] + (double(x) + 0.5) * s), float(origin_[1] + (double(y) + 0.5) * s),
-           float(origin_[2] + (double(z) + 0.5) * s)};
+    const double s = cell_size(level);
+    b.c = {centre(0, x, s), centre(1, y, s), centre(2, z, s)};
     b.h = float(0.5 * s);
     return b;
   }
@@ -89,16 +85,11 @@ class Refiner {
   /// computed once (box()'s formula) instead of 24 times.
   void children(const CellBox& b, CellBox kids[8]) const {
     const int level = b.level + 1;
-    const double s = level <= octree::kMaxDepth
-                         ? scale_[size_t(level)]
-                         : double(ed_.texture().size()) / double(1u << level);
+    const double s = cell_size(level);
     const uint32_t x = 2 * b.x, y = 2 * b.y, z = 2 * b.z;
     float cx[2], cy[2], cz[2];
-    for (uint32_t i = 0; i < 2; ++i) {
-      cx[i] = float(origin_[0] + (double(x + i) + 0.5) * s);
-      cy[i] = float(origin_[1] + (double(y + i) + 0.5) * s);
-      cz[i] = float(origin_[2] + (double(z + i) + 0.5) * s);
-    }
+    for (uint32_t i = 0; i < 2; ++i)
+      cx[i] = centre(0, x + i, s), cy[i] = centre(1, y + i, s), cz[i] = centre(2, z + i, s);
     const float h = float(0.5 * s);
     for (int c = 0; c < 8; ++c) {
       const uint32_t i = uint32_t(c & 1), j = uint32_t(c >> 1 & 1), k = uint32_t(c >> 2 & 1);
@@ -129,6 +120,16 @@ class Refiner {
   RefineStats stats;
 
  private:
+  /// A cell's size at a level: the quotient divided out once per level.
+  double cell_size(int level) const {
+    return level >= 0 && level <= octree::kMaxDepth
+               ? scale_[size_t(level)]
+               : double(ed_.texture().size()) / double(1u << level);
+  }
+  /// The centre coordinate along `axis` of cell i of size s.
+  float centre(int axis, uint32_t i, double s) const {
+    return float(origin_[axis] + (double(i) + 0.5) * s);
+  }
   bool meets(const CellBox& b) const;
   /// b lies inside the region (with a margin): meets() holds for every cell inside b.
   bool within(const CellBox& b) const;

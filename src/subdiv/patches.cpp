@@ -1762,8 +1762,7 @@ class RegionBuilder {
   // their own copy of a row they share with another region's).
   static void append_weights(const StencilTable& src, StencilTable& dst) {
     const uint32_t at = uint32_t(dst.weights.size());
-    for (size_t i = 0; i < src.size(); ++i)
-      dst.weight_offsets.push_back(at + (src.shared() ? src.weight_offsets[i] : src.offsets[i]));
+    for (size_t i = 0; i < src.size(); ++i) dst.weight_offsets.push_back(at + src.weight_start(i));
     dst.weights.insert(dst.weights.end(), src.weights.begin(), src.weights.end());
   }
 

@@ -31,8 +31,6 @@ class SharedWeights {
     if (n) std::memcpy(&first, w, sizeof first);
     Recent& r = recent_[((first ^ n) * 0x9E3779B1u) >> (32 - kRecentBits)];
     if (r.size == n && equal(pool.data() + r.at, w, n)) return remember(r.at, n);
-    r.size = UINT32_MAX;  // refilled below
-    pool_ = &pool;
     const uint64_t h = hash(w, n);
     const uint32_t key = uint32_t(h >> 32) | 1u;  // 0 marks an empty slot
     const size_t mask = slots_.size() - 1;
@@ -41,7 +39,7 @@ class SharedWeights {
       if (slot.key == 0) {
         slot = {key, n, uint32_t(pool.size())};
         pool.insert(pool.end(), w, w + n);
-        if (2 * ++used_ > slots_.size()) grow();
+        if (2 * ++used_ > slots_.size()) grow(pool);
         r = {uint32_t(pool.size() - n), n};
         return remember(r.at, n);
       }
@@ -81,19 +79,18 @@ class SharedWeights {
     }
     return h ^ (h >> 29);
   }
-  void grow() {
+  void grow(const std::vector<float>& pool) {
     std::vector<Slot> old(2 * slots_.size());
     old.swap(slots_);
     const size_t mask = slots_.size() - 1;
     for (const Slot& o : old) {
       if (o.key == 0) continue;
-      size_t s = size_t(hash(pool_->data() + o.at, o.size)) & mask;
+      size_t s = size_t(hash(pool.data() + o.at, o.size)) & mask;
       while (slots_[s].key != 0) s = (s + 1) & mask;
       slots_[s] = o;
     }
   }
 
-  std::vector<float>* pool_ = nullptr;
   std::vector<Slot> slots_;
   size_t used_ = 0;
   uint32_t last_at_ = 0, last_size_ = UINT32_MAX;  // the previous row

@@ -137,9 +137,7 @@ TEST(PaintGeometry, BoxQueryEqualsTestingEveryTriangle) {
       if (n[0] == 0 && n[1] == 0 && n[2] == 0) continue;
       const V3 p0 = paint_detail::v3(s.corner(t, 0)), p1 = paint_detail::v3(s.corner(t, 1)),
                p2 = paint_detail::v3(s.corner(t, 2));
-      if (paint_detail::tri_inside_box(cc, h, p0, p1, p2, slack) ||
-          paint_detail::tri_box_overlap(cc, h, p0, p1, p2, slack))
-        want.push_back(t);
+      if (paint_detail::tri_meets_box(cc, h, p0, p1, p2, slack)) want.push_back(t);
     }
     ASSERT_EQ(got, want) << "box " << iter << " half size " << h;
     found += got.size();

@@ -45,10 +45,12 @@ struct StencilTable {
   std::vector<float> weights;
   size_t size() const { return offsets.size() - 1; }
   bool shared() const { return !weight_offsets.empty(); }
-  /// Row i's weights: offsets[i + 1] - offsets[i] floats.
-  const float* row_weights(size_t i) const {
-    return weights.data() + (weight_offsets.empty() ? offsets[i] : weight_offsets[i]);
+  /// Where row i's weights start in `weights`.
+  uint32_t weight_start(size_t i) const {
+    return weight_offsets.empty() ? offsets[i] : weight_offsets[i];
   }
+  /// Row i's weights: offsets[i + 1] - offsets[i] floats.
+  const float* row_weights(size_t i) const { return weights.data() + weight_start(i); }
 };
 
 /// Applies a stencil table to `channels` interleaved floats per point: out gets size() points.
