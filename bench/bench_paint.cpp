@@ -25,7 +25,7 @@
 // first pass (refining from the start tree) and a second pass over the same dabs, each dab a
 // stroke of its own (a click); then dabs in strokes of 12-13 dabs (a drag) at radius 16 and 32,
 // with the stroke's reuse across dabs on and off (StrokePainter::set_reuse).
-//   limn_bench_paint [--models DIR] [--depths 6,7,8,9,10,11] [--points N] [--quick]
+//   limn_bench_paint [--models DIR] [--depths 6,7,8,9,10,11] [--points N] [--quick] [--threads N]
 //                    [--only table|lookups|dabs|strokes] [--dump FILE] [--cpu-clock] [--reps N]
 // --only: one part (dabs: both dab tables; strokes: the second alone; lookups still build limn full
 // and the VDB grid at depth 10, unprinted);
@@ -33,7 +33,8 @@
 // (after each pass), to check that a change leaves results bit for bit as they were;
 // --cpu-clock: lookup and dab times in thread CPU time instead of wall time (for a busy
 // machine); --reps:
-// lookup repetitions (3).
+// lookup repetitions (3); --threads: TBB's threads for the dabs (1; above 1, wall time even with
+// --cpu-clock; lookups stay single-threaded, the table's builds too).
 #include <fmt/format.h>
 #include <tbb/global_control.h>
 
@@ -293,6 +294,7 @@ struct Args {
   bool quick = false;
   std::string only;  // "", "table", "lookups" or "dabs"
   bool cpu_clock = false;
+  int threads = 1;
   int reps = 3;  // lookup repetitions (medians)
   fs::path dump;
 };
@@ -325,6 +327,11 @@ uint64_t sample_hash(const OctreeTexture& t) {
 
 }  // namespace
 
+std::string threads_label(const Args& a) {
+  return a.threads == 1 ? std::string("single thread")
+                        : fmt::format("{} threads, wall time", a.threads);
+}
+
 int main(int argc, char** argv) {
   Args a;
   for (int i = 1; i < argc; ++i) {
@@ -334,6 +341,8 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--only") && i + 1 < argc) a.only = argv[++i];
     if (!std::strcmp(argv[i], "--dump") && i + 1 < argc) a.dump = argv[++i];
     if (!std::strcmp(argv[i], "--cpu-clock")) a.cpu_clock = true;
+    if (!std::strcmp(argv[i], "--threads") && i + 1 < argc)
+      a.threads = std::max(1, std::atoi(argv[++i]));
     if (!std::strcmp(argv[i], "--reps") && i + 1 < argc) a.reps = std::max(1, std::atoi(argv[++i]));
     if (!std::strcmp(argv[i], "--depths") && i + 1 < argc) {
       a.depths.clear();
@@ -341,8 +350,9 @@ int main(int argc, char** argv) {
         a.depths.push_back(std::atoi(tok));
     }
   }
-  g_cpu_clock = a.cpu_clock;
-  tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+  // A thread's CPU time says nothing of a parallel dab's wait: wall time with threads.
+  g_cpu_clock = a.cpu_clock && a.threads == 1;
+  tbb::global_control one(tbb::global_control::max_allowed_parallelism, size_t(a.threads));
   openvdb::initialize();
   const std::vector<std::string> names = {"tri/stanford-bunny.obj", "tri/spot.obj",
                                           "tri/armadillo-100k.obj"};
@@ -576,7 +586,7 @@ int main(int argc, char** argv) {
   }
 
   if (do_dabs)
-    fmt::print("\n## Dab time at depth 10 (single thread; radius in depth-10 leaves)\n\n");
+    fmt::print("\n## Dab time at depth 10 ({}; radius in depth-10 leaves)\n\n", threads_label(a));
   if (do_dabs)
     fmt::print(
         "| model | radius | dabs | first pass ms/dab (median) | mean | second pass ms/dab (median) "
@@ -629,9 +639,10 @@ int main(int argc, char** argv) {
   // one stroke, painted with reuse across dabs on and off (the same texture, bit for bit).
   if (do_strokes)
     fmt::print(
-        "\n## Dabs in strokes at depth 10 (single thread; spacing 0.25 radius; ms per dab)\n\n"
+        "\n## Dabs in strokes at depth 10 ({}; spacing 0.25 radius; ms per dab)\n\n"
         "| model | radius | strokes | dabs | first pass, reuse | repaint, reuse | first pass, no "
-        "reuse | repaint, no reuse |\n|---|---:|---:|---:|---:|---:|---:|---:|\n");
+        "reuse | repaint, no reuse |\n|---|---:|---:|---:|---:|---:|---:|---:|\n",
+        threads_label(a));
   for (const std::string& name : do_strokes ? names : std::vector<std::string>{}) {
     const Mesh mesh = read_mesh(a.models / name);
     const PaintSurface surf(mesh);

@@ -83,7 +83,7 @@ class FlatMap {
     if (2 * n > slots_.size()) grow(std::bit_ceil(2 * n));
   }
   V& find_or_add(uint64_t key, const V& init) {
-    if (2 * (count_ + 1) > slots_.size()) grow(std::max<size_t>(1024, 2 * slots_.size()));
+    if (2 * (count_ + 1) > slots_.size()) grow(std::max<size_t>(32, 2 * slots_.size()));
     size_t i = slot(key);
     for (;; i = (i + 1) & (slots_.size() - 1)) {
       if (slots_[i].key == key) return slots_[i].val;
@@ -197,11 +197,6 @@ struct StrokePainter::State : LeafPainter {
   PaintCamera camera;
   StrokeStats stats;
   std::chrono::steady_clock::time_point t0;
-  struct Texel {
-    Rgba8 orig;
-    float w;
-  };
-  BlockMap<Texel> texels;
   float cos_falloff = 0;  // cos(brush.falloff_angle_deg)
   // The current dab.
   V3 c, n0;
@@ -249,6 +244,47 @@ struct StrokePainter::State : LeafPainter {
     return w;
   }
 
+  bool reuse = false;
+  struct Shard;
+  // Per task cell of the refiner (see LeafPainter::shard): what painting its cells writes.
+  std::unordered_map<uint64_t, std::unique_ptr<Shard>> shards;
+  bool sharded() const override { return true; }
+  LeafPainter* shard(uint64_t key) override;
+  void paint(const CellBox& box, LeafCell& cell, std::span<const uint32_t> cell_tris,
+             uint32_t memo) override {
+    shard(~uint64_t(0))->paint(box, cell, cell_tris, memo);
+  }
+
+  void dab(V3 centre, float region_r) {
+    c = centre;
+    const int depth = brush.depth;
+    const float leaf_diag = tex.size() / float(1u << depth) * 1.7320508f;
+    const float list_r = region_r + leaf_diag * 1.001f + tex.size() * 1e-5f;
+    tris.clear();
+    const float cc[3] = {c.x, c.y, c.z};
+    surf.triangles_near(cc, list_r, tris);
+    Region reg;
+    reg.everything = false, reg.c = c, reg.r = region_r;
+    // From the stroke's second dab on (a single dab, a click, would only pay for the keeping).
+    refiner.keep_brick_lists(reuse && stats.dabs > 0);
+    refiner.run(reg, tris, depth, this);
+    ++stats.dabs;
+  }
+};
+
+// What painting the cells of one task cell writes: their rays in flight, per texel the colour
+// before the stroke and the strongest weight any dab gave it, the reuse memos; the brush, the
+// eye and the dab are the stroke's (read only while the refiner runs).
+struct StrokePainter::State::Shard : LeafPainter {
+  explicit Shard(const State& s) : st(s) {}
+  const State& st;
+  size_t samples_changed = 0, rays = 0;
+  struct Texel {
+    Rgba8 orig;
+    float w;
+  };
+  BlockMap<Texel> texels;
+
   // A texel whose ray is in flight: the cell stays where it is until the refiner's next flush.
   struct Pending {
     uint64_t key;
@@ -268,14 +304,14 @@ struct StrokePainter::State : LeafPainter {
     Texel& tx = texels.find_or_add(key, Texel{cell.s[side], 0.0f});
     if (w <= tx.w) return;
     tx.w = w;
-    const Rgba8 nc = blend(tx.orig, brush.color, brush.blend, w);
-    if (nc != cell.s[side]) ++stats.samples_changed, cell.s[side] = nc;
+    const Rgba8 nc = blend(tx.orig, st.brush.color, st.brush.blend, w);
+    if (nc != cell.s[side]) ++samples_changed, cell.s[side] = nc;
   }
 
   void flush() override {
     if (!npending) return;
-    surf.occluded_many(npending, ray_org, ray_dir, ray_near, ray_far, ray_hit);
-    stats.rays += npending;
+    st.surf.occluded_many(npending, ray_org, ray_dir, ray_near, ray_far, ray_hit);
+    rays += npending;
     for (size_t i = 0; i < npending; ++i)
       if (!ray_hit[i]) apply(pending[i].key, *pending[i].cell, pending[i].side, pending[i].w);
     npending = 0;
@@ -291,7 +327,6 @@ struct StrokePainter::State : LeafPainter {
     uint8_t tag, has;  // has: bit side, a triangle on that side
     float q[2][3], nq[2][3];
   };
-  bool reuse = false;
   static constexpr size_t kNearChunk = 4096;
   std::vector<uint8_t> near_known;                  // per memo: its slot holds the cell's tag's
   std::vector<std::unique_ptr<Near[]>> near_slots;  // chunks of kNearChunk, never moved
@@ -303,9 +338,9 @@ struct StrokePainter::State : LeafPainter {
     float best[2] = {INFINITY, INFINITY};
     uint32_t arg[2] = {0, 0};
     for (uint32_t t : cell_tris) {
-      const int side = surf.side(cell.tag, t);
-      const V3 p = closest_on_triangle(box.c, v3(surf.corner(t, 0)), v3(surf.corner(t, 1)),
-                                       v3(surf.corner(t, 2)));
+      const int side = st.surf.side(cell.tag, t);
+      const V3 p = closest_on_triangle(box.c, v3(st.surf.corner(t, 0)), v3(st.surf.corner(t, 1)),
+                                       v3(st.surf.corner(t, 2)));
       const V3 d = p - box.c;
       const float d2 = dot(d, d);
       if (d2 < best[side])
@@ -315,7 +350,7 @@ struct StrokePainter::State : LeafPainter {
     for (int side = 0; side < 2; ++side)
       if (best[side] != INFINITY) {
         e.has = uint8_t(e.has | 1 << side);
-        const float* n = surf.normal(arg[side]);
+        const float* n = st.surf.normal(arg[side]);
         e.nq[side][0] = n[0], e.nq[side][1] = n[1], e.nq[side][2] = n[2];
       }
   }
@@ -329,7 +364,7 @@ struct StrokePainter::State : LeafPainter {
              uint32_t memo) override {
     Near local;
     const Near* e = &local;
-    if (reuse && memo != kNoMemo) {
+    if (st.reuse && memo != kNoMemo) {
       if (memo >= near_known.size())
         near_known.resize(std::max<size_t>(size_t(memo) + 1, 2 * near_known.size()), 0);
       const size_t chunk = memo / kNearChunk;
@@ -355,10 +390,10 @@ struct StrokePainter::State : LeafPainter {
     const uint64_t cell_key = key_block | low2(box.x) | low2(box.y) << 1 | low2(box.z) << 2;
     for (int side = 0; side < 2; ++side) {
       if (!(e->has >> side & 1)) continue;
-      if (side == 1 && !cell.dbl) cell.dbl = true, cell.s[1] = tex.background();
+      if (side == 1 && !cell.dbl) cell.dbl = true, cell.s[1] = st.tex.background();
       V3 o, dir;
       float len;
-      const float w = weight(v3(e->q[side]), v3(e->nq[side]), box.h, o, dir, len);
+      const float w = st.weight(v3(e->q[side]), v3(e->nq[side]), box.h, o, dir, len);
       if (!(w > 0)) continue;
       const uint64_t key = cell_key | uint64_t(side) << 53;
       // A texel this stroke already gave as much changes whatever the ray finds: no ray.
@@ -372,26 +407,13 @@ struct StrokePainter::State : LeafPainter {
       ++npending;
     }
   }
-
-  void dab(V3 centre, float region_r) {
-    c = centre;
-    const int depth = brush.depth;
-    const float leaf = tex.size() / float(1u << depth), leaf_diag = leaf * 1.7320508f;
-    // About the texels of a flat disc of the brush's radius, both sides counted once.
-    const double across = std::min(double(r_world / leaf), 1024.0);
-    texels.reserve(size_t(4.0 * across * across) + 64);
-    const float list_r = region_r + leaf_diag * 1.001f + tex.size() * 1e-5f;
-    tris.clear();
-    const float cc[3] = {c.x, c.y, c.z};
-    surf.triangles_near(cc, list_r, tris);
-    Region reg;
-    reg.everything = false, reg.c = c, reg.r = region_r;
-    // From the stroke's second dab on (a single dab, a click, would only pay for the keeping).
-    refiner.keep_brick_lists(reuse && stats.dabs > 0);
-    refiner.run(reg, tris, depth, this);
-    ++stats.dabs;
-  }
 };
+
+LeafPainter* StrokePainter::State::shard(uint64_t key) {
+  std::unique_ptr<Shard>& s = shards[key];
+  if (!s) s = std::make_unique<Shard>(*this);
+  return s.get();
+}
 
 StrokePainter::StrokePainter(OctreeTexture& texture, const PaintSurface& surface,
                              PaintHistory* history)
@@ -519,9 +541,12 @@ void StrokePainter::stroke_screen(std::span<const double> xy) {
 StrokeStats StrokePainter::end() {
   if (!st_) return {};
   StrokeStats s = st_->stats;
+  for (const auto& [key, sh] : st_->shards)
+    s.samples_changed += sh->samples_changed, s.rays += sh->rays;
   s.leaves_created = st_->refiner.stats.leaves_created;
   s.bricks_created = st_->refiner.stats.bricks_created;
   s.nodes_created = st_->refiner.stats.generals_created + st_->refiner.stats.bricks_created;
+  s.tasks = st_->refiner.stats.tasks, s.tasks_threaded = st_->refiner.stats.tasks_threaded;
   s.ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - st_->t0).count();
   delete st_;

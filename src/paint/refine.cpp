@@ -7,6 +7,13 @@
 #include <bit>
 #include <cmath>
 
+#include <mutex>
+#include <stdexcept>
+
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
 namespace limn::detail {
 
 using namespace paint_detail;
@@ -160,22 +167,39 @@ LeafCell Refiner::make_leaf(std::span<const uint32_t> tris, const LeafCell* pare
   return cell;
 }
 
-Rgba8 Refiner::child_avg(const GeneralNode& n, int c) const {
+std::span<const uint32_t> Refiner::block(const Ctx& w, uint32_t ptr, uint32_t& at) const {
+  if (w.log && ptr >= temp0_) {
+    for (const Ctx* x = &w; x; x = x->up) {
+      if (!x->log) continue;
+      const Log::Op* op = x->log->find(ptr);
+      if (!op) continue;
+      at = 0;
+      return std::span<const uint32_t>(x->log->words).subspan(op->off, op->n);
+    }
+    throw std::logic_error("octree refiner: a temporary block address not in any log");
+  }
+  at = ptr;
+  return ed_.pool();
+}
+
+Rgba8 Refiner::child_avg(const Ctx& w, const GeneralNode& n, int c) const {
+  uint32_t at = 0;
   if (n.kind[c] == CellKind::general)
-    return ed_.word(n.ptr[c] + 2 * uint32_t(popc(octree::generals(n.info[c]))) +
-                    uint32_t(popc(octree::bricks(n.info[c]))));
+    return block(w, n.ptr[c], at)[at + 2 * uint32_t(popc(octree::generals(n.info[c]))) +
+                                  uint32_t(popc(octree::bricks(n.info[c])))];
   if (n.kind[c] == CellKind::brick) {
-    const uint32_t w = n.ptr[c];
-    return ed_.word((w & ~octree::kBrickDoubleFlag) + 2 + ((w & octree::kBrickDoubleFlag) ? 2 : 0));
+    const uint32_t word = n.ptr[c];
+    return block(w, word & ~octree::kBrickDoubleFlag,
+                 at)[at + 2 + ((word & octree::kBrickDoubleFlag) ? 2 : 0)];
   }
   return 0;
 }
 
-Rgba8 Refiner::general_avg(const GeneralNode& n) const {
+Rgba8 Refiner::general_avg(const Ctx& w, const GeneralNode& n) const {
   ColorMean m;
   for (int c = 0; c < 8; ++c) {
     if (n.kind[c] == CellKind::leaf) add_leaf(m, n.leaf[c]);
-    if (n.kind[c] == CellKind::general || n.kind[c] == CellKind::brick) m.add(child_avg(n, c));
+    if (n.kind[c] == CellKind::general || n.kind[c] == CellKind::brick) m.add(child_avg(w, n, c));
   }
   return m.mean();
 }
@@ -184,37 +208,88 @@ Rgba8 Refiner::brick_avg(const Brick& b) {
   return brick_average(b);
 }
 
-void Refiner::store_general(const GeneralNode& n, uint32_t old_ptr, uint32_t old_info,
-                            uint32_t& ptr, uint32_t& info) {
-  info = encode_general(n, words_);
-  const uint32_t old_n = old_ptr ? general_block_words(old_info) : 0;
-  ptr = ed_.replace_block(old_ptr, old_n, words_, false);
+uint32_t Refiner::put_block(Ctx& w, uint32_t old_ptr, uint32_t old_n, bool brick, int generals,
+                            int bricks) {
+  if (!w.log) return ed_.replace_block(old_ptr, old_n, w.words, brick);
+  Log& log = *w.log;
+  Log::Op op;
+  op.kind = Log::kStore, op.brick = brick;
+  op.generals = uint8_t(generals), op.bricks = uint8_t(bricks);
+  op.ptr = old_ptr, op.old_n = old_n;
+  op.off = uint32_t(log.words.size()), op.n = uint32_t(w.words.size());
+  op.temp = next_temp_.fetch_add(1, std::memory_order_relaxed);
+  log.words.insert(log.words.end(), w.words.begin(), w.words.end());
+  log.index(op.temp, uint32_t(log.ops.size()));
+  log.ops.push_back(op);
+  return op.temp;
 }
 
-uint32_t Refiner::store_brick(const Brick& b, uint32_t old_word) {
-  const uint32_t flag = encode_brick(b, words_);
+void Refiner::release(Ctx& w, uint32_t ptr, uint32_t n, bool brick) {
+  if (!w.log) return ed_.release(ptr, n, brick);
+  Log::Op op{};
+  op.kind = Log::kRelease, op.brick = brick, op.ptr = ptr, op.old_n = n;
+  w.log->ops.push_back(op);
+}
+
+void Refiner::merge(Log& into, const Log& from) {
+  const uint32_t woff = uint32_t(into.words.size());
+  into.words.insert(into.words.end(), from.words.begin(), from.words.end());
+  for (Log::Op op : from.ops) {
+    if (op.kind == Log::kStore) op.off += woff, into.index(op.temp, uint32_t(into.ops.size()));
+    into.ops.push_back(op);
+  }
+}
+
+void Refiner::replay(const Log& log) {
+  real_.assign(next_temp_.load() - temp0_, 0);
+  std::vector<uint32_t> words;
+  for (const Log::Op& op : log.ops) {
+    if (op.kind == Log::kRelease) {
+      ed_.release(resolve(op.ptr), op.old_n, op.brick);
+      continue;
+    }
+    words.assign(log.words.begin() + op.off, log.words.begin() + op.off + op.n);
+    for (uint32_t k = 0; k < op.generals; ++k) words[2 * k] = resolve(words[2 * k]);
+    for (uint32_t k = 0; k < op.bricks; ++k)
+      words[2 * op.generals + k] = resolve_brick(words[2 * op.generals + k]);
+    real_[op.temp - temp0_] = ed_.replace_block(resolve(op.ptr), op.old_n, words, op.brick);
+  }
+}
+
+void Refiner::store_general(Ctx& w, const GeneralNode& n, uint32_t old_ptr, uint32_t old_info,
+                            uint32_t& ptr, uint32_t& info) {
+  info = encode_general(n, w.words);
+  const uint32_t old_n = old_ptr ? general_block_words(old_info) : 0;
+  ptr =
+      put_block(w, old_ptr, old_n, false, popc(octree::generals(info)), popc(octree::bricks(info)));
+}
+
+uint32_t Refiner::store_brick(Ctx& w, const Brick& b, uint32_t old_word) {
+  const uint32_t flag = encode_brick(b, w.words);
   uint32_t old_ptr = 0, old_n = 0;
   if (old_word) {
     old_ptr = old_word & ~octree::kBrickDoubleFlag;
-    const Brick old = decode_brick(ed_.pool(), old_word);
+    uint32_t at = 0;
+    const std::span<const uint32_t> words = block(w, old_ptr, at);
+    const Brick old = decode_brick(words, at | (old_word & octree::kBrickDoubleFlag));
     old_n = brick_block_words(old.mask, old.dbl);
   }
-  return ed_.replace_block(old_ptr, old_n, words_, true) | flag;
+  return put_block(w, old_ptr, old_n, true, 0, 0) | flag;
 }
 
-GeneralNode Refiner::refine_leaf(const CellBox& cb, const LeafCell& leaf,
+GeneralNode Refiner::refine_leaf(Ctx& w, const CellBox& cb, const LeafCell& leaf,
                                  std::span<const uint32_t> full) {
   GeneralNode g;
-  Split& parts = scratch_[size_t(cb.level)].full_parts;
+  Split& parts = w.scratch[size_t(cb.level)].full_parts;
   split(full, cb, parts);
   for (int c = 0; c < 8; ++c) {
     const std::vector<uint32_t>& fc = parts[size_t(c)];
     if (fc.empty()) continue;
     g.kind[c] = CellKind::leaf;
     g.leaf[c] = make_leaf(fc, &leaf);
-    ++stats.leaves_created;
+    ++w.stats.leaves_created;
   }
-  ++stats.generals_created;
+  ++w.stats.generals_created;
   return g;
 }
 
@@ -234,10 +309,11 @@ void intersect_sorted(std::span<const uint32_t> a, std::span<const uint32_t> b,
 
 }  // namespace
 
-bool Refiner::build_brick(const CellBox& cb, const LeafCell& leaf, std::span<const uint32_t> full,
-                          std::span<const uint32_t> tris, Brick& b) {
+bool Refiner::build_brick(Ctx& w, const CellBox& cb, const LeafCell& leaf,
+                          std::span<const uint32_t> full, std::span<const uint32_t> tris,
+                          Brick& b) {
   b = Brick{};
-  Split &p1 = brick1_, &p2 = brick2_;
+  Split &p1 = w.brick1, &p2 = w.brick2;
   CellBox k1[8], k2[8];
   children(cb, k1);
   split(full, cb, k1, p1);
@@ -257,28 +333,29 @@ bool Refiner::build_brick(const CellBox& cb, const LeafCell& leaf, std::span<con
       const int m = 8 * c1 + c2;
       b.mask |= uint64_t(1) << m;
       b.cell[m] = make_leaf(f2, &leaf);
-      ++stats.leaves_created;
+      ++w.stats.leaves_created;
     }
     if (!inside && !meets(b1)) continue;
     for (int c2 = 0; c2 < 8; ++c2) {
       const std::vector<uint32_t>& f2 = p2[size_t(c2)];
       if (f2.empty()) continue;
-      if (!same) intersect_sorted(f2, tris, sub_);
-      const std::vector<uint32_t>& t2 = same ? f2 : sub_;
+      if (!same) intersect_sorted(f2, tris, w.sub);
+      const std::vector<uint32_t>& t2 = same ? f2 : w.sub;
       const CellBox& b2 = k2[c2];
       if (t2.empty() || !(inside || meets(b2))) continue;
-      if (painter_)
-        painter_->paint(b2, b.cell[8 * c1 + c2], t2, LeafPainter::kNoMemo), ++stats.leaves_painted;
+      if (w.painter)
+        w.painter->paint(b2, b.cell[8 * c1 + c2], t2, LeafPainter::kNoMemo),
+            ++w.stats.leaves_painted;
     }
   }
-  ++stats.bricks_created;  // counted as before, even when no sub-cell meets the surface
+  ++w.stats.bricks_created;  // counted as before, even when no sub-cell meets the surface
   if (b.mask == 0) return false;
-  if (painter_) painter_->flush();
+  if (w.painter) w.painter->flush();
   b.avg = brick_avg(b);
   return true;
 }
 
-GeneralNode Refiner::explode(const Brick& b, const CellBox&) {
+GeneralNode Refiner::explode(Ctx& w, const Brick& b, const CellBox&) {
   GeneralNode g;
   for (int c1 = 0; c1 < 8; ++c1) {
     const uint32_t byte = uint32_t(b.mask >> (8 * c1)) & 255u;
@@ -286,16 +363,16 @@ GeneralNode Refiner::explode(const Brick& b, const CellBox&) {
     GeneralNode child;
     for (int c2 = 0; c2 < 8; ++c2)
       if (byte >> c2 & 1) child.kind[c2] = CellKind::leaf, child.leaf[c2] = b.cell[8 * c1 + c2];
-    child.avg = general_avg(child);
-    store_general(child, 0, 0, g.ptr[c1], g.info[c1]);
+    child.avg = general_avg(w, child);
+    store_general(w, child, 0, 0, g.ptr[c1], g.info[c1]);
     g.kind[c1] = CellKind::general;
   }
   g.avg = b.avg;
-  ++stats.bricks_exploded;
+  ++w.stats.bricks_exploded;
   return g;
 }
 
-bool Refiner::try_compact(const GeneralNode& n, Brick& out) const {
+bool Refiner::try_compact(const Ctx& w, const GeneralNode& n, Brick& out) const {
   bool any = false;
   for (int c = 0; c < 8; ++c) {
     if (n.kind[c] == CellKind::empty) continue;
@@ -307,7 +384,9 @@ bool Refiner::try_compact(const GeneralNode& n, Brick& out) const {
   out = Brick{};
   for (int c1 = 0; c1 < 8; ++c1) {
     if (n.kind[c1] != CellKind::general) continue;
-    const GeneralNode child = decode_general(ed_.pool(), n.ptr[c1], n.info[c1]);
+    uint32_t at = 0;
+    const std::span<const uint32_t> words = block(w, n.ptr[c1], at);
+    const GeneralNode child = decode_general(words, at, n.info[c1]);
     for (int c2 = 0; c2 < 8; ++c2)
       if (child.kind[c2] == CellKind::leaf) {
         out.mask |= uint64_t(1) << (8 * c1 + c2);
@@ -332,8 +411,8 @@ bool same_cells(const Brick& a, const Brick& b) {
 
 }  // namespace
 
-void Refiner::visit_brick(Brick& b, const CellBox& bb, std::span<const uint32_t> tris) {
-  Split &p1 = brick1_, &p2 = brick2_;
+void Refiner::visit_brick(Ctx& w, Brick& b, const CellBox& bb, std::span<const uint32_t> tris) {
+  Split &p1 = w.brick1, &p2 = w.brick2;
   // Only children meeting the region are visited: only they are split.
   CellBox k1[8], k2[8][8];
   children(bb, k1);
@@ -351,28 +430,29 @@ void Refiner::visit_brick(Brick& b, const CellBox& bb, std::span<const uint32_t>
       // A surface cell the brick lacks: the texture was made for another mesh.
       b.mask |= uint64_t(1) << m;
       b.cell[m] = make_leaf(t2, nullptr);
-      ++stats.leaves_created;
+      ++w.stats.leaves_created;
     }
     const uint32_t memo = memo0 == LeafPainter::kNoMemo ? memo0 : memo0 + uint32_t(m);
-    if (painter_) painter_->paint(k2[c1][c2], b.cell[m], t2, memo), ++stats.leaves_painted;
+    if (w.painter) w.painter->paint(k2[c1][c2], b.cell[m], t2, memo), ++w.stats.leaves_painted;
   };
   uint64_t want = 0;
   if (keep_) {
     for (int c1 = 0; c1 < 8; ++c1) want |= uint64_t(want2[c1]) << (8 * c1);
     const uint64_t key = morton3(bb.x, bb.y, bb.z) | uint64_t(bb.level) << 48;
-    const auto [it, added] = kept_index_.try_emplace(key, uint32_t(kept_.size()));
-    if (added) kept_.emplace_back();
-    kept = &kept_[it->second];
+    Kept& k = *w.kept;
+    const auto [it, added] = k.index.try_emplace(key, uint32_t(k.bricks.size()));
+    if (added) k.bricks.emplace_back();
+    kept = &k.bricks[it->second];
     if (it->second < (1u << 25)) memo0 = 64 * it->second;
     if (!(want & ~kept->known)) {
       // Every leaf wanted has its list from an earlier run: the same visits, no split.
-      for (uint64_t w = want; w; w &= w - 1) {
-        const int m = std::countr_zero(w);
+      for (uint64_t left = want; left; left &= left - 1) {
+        const int m = std::countr_zero(left);
         if (kept->len[m])
           visit_leaf(m >> 3, m & 7,
-                     std::span<const uint32_t>(kept_tris_.data() + kept->off[m], kept->len[m]));
+                     std::span<const uint32_t>(w.kept->tris.data() + kept->off[m], kept->len[m]));
       }
-      if (painter_) painter_->flush();
+      if (w.painter) w.painter->flush();
       return;
     }
   }
@@ -385,25 +465,26 @@ void Refiner::visit_brick(Brick& b, const CellBox& bb, std::span<const uint32_t>
       if (!(want2[c1] >> c2 & 1)) continue;
       const int m = 8 * c1 + c2;
       if (kept) {
-        kept->off[m] = uint32_t(kept_tris_.size());
+        std::vector<uint32_t>& kt = w.kept->tris;
+        kept->off[m] = uint32_t(kt.size());
         kept->len[m] = any ? uint32_t(p2[size_t(c2)].size()) : 0;
-        if (any) kept_tris_.insert(kept_tris_.end(), p2[size_t(c2)].begin(), p2[size_t(c2)].end());
+        if (any) kt.insert(kt.end(), p2[size_t(c2)].begin(), p2[size_t(c2)].end());
       }
       if (!any || p2[size_t(c2)].empty()) continue;
       visit_leaf(c1, c2, p2[size_t(c2)]);
     }
   }
   if (kept) kept->known |= want;
-  if (painter_) painter_->flush();
+  if (w.painter) w.painter->flush();
 }
 
-void Refiner::visit_general(GeneralNode& n, const CellBox& nb, std::span<const uint32_t> tris,
+void Refiner::visit_general(Ctx& w, GeneralNode& n, const CellBox& nb,
+                            std::span<const uint32_t> tris,
                             const std::vector<uint32_t>* parent_full) {
   CellBox kids[8];
   children(nb, kids);
   const uint32_t want = meeting(kids);
-  Scratch& sc = scratch_[size_t(nb.level)];
-  std::vector<uint32_t>& full = sc.full;
+  Scratch& sc = w.scratch[size_t(nb.level)];
   Split &parts = sc.parts, &full_parts = sc.full_parts;
   // Just refined: full_parts holds parent_full split by child, and tris (a subset of
   // parent_full, both sorted) splits into the same lists less the triangles it lacks.
@@ -415,117 +496,278 @@ void Refiner::visit_general(GeneralNode& n, const CellBox& nb, std::span<const u
     for (int c = 0; c < 8; ++c) intersect_sorted(full_parts[size_t(c)], tris, parts[size_t(c)]);
   }
   const Split& tparts = same ? full_parts : parts;
-  for (int c = 0; c < 8; ++c) {
-    const CellBox& cb = kids[c];
-    const std::vector<uint32_t>& tc = tparts[size_t(c)];
-    if (tc.empty() || !(want >> c & 1)) continue;
-    const int level = cb.level;
-    // A child's full list, from its parent's when known (no BVH query, and no triangles from
-    // outside the parent's box to test).
-    auto child_full = [&] {
-      if (full_split) {
-        full = full_parts[size_t(c)];
-      } else {
-        full_tris(cb, tc, full);
-      }
-    };
-    if (n.kind[c] == CellKind::empty) {
-      child_full();
-      if (full.empty()) continue;
-      n.kind[c] = CellKind::leaf;
-      n.leaf[c] = make_leaf(full, nullptr);
-      ++stats.leaves_created;
-    }
-    switch (n.kind[c]) {
-      case CellKind::leaf: {
-        if (level >= depth_) {
-          if (painter_)
-            painter_->paint(cb, n.leaf[c], tc, LeafPainter::kNoMemo), ++stats.leaves_painted;
-          break;
-        }
-        child_full();
-        // A cell the surface only grazes within the boxes' slack may have no sub-cell the surface
-        // meets once rounded: it stays a leaf.
-        if (level == depth_ - 2) {
-          Brick b;
-          if (!build_brick(cb, n.leaf[c], full, tc, b)) break;
-          n.kind[c] = CellKind::brick;
-          n.ptr[c] = store_brick(b, 0);
-        } else {
-          GeneralNode g = refine_leaf(cb, n.leaf[c], full);
-          bool any = false;
-          for (int k = 0; k < 8; ++k) any |= g.kind[k] != CellKind::empty;
-          if (!any) break;
-          visit_general(g, cb, tc, &full);
-          n.kind[c] = CellKind::general;
-          store_general(g, 0, 0, n.ptr[c], n.info[c]);
-        }
-        break;
-      }
-      case CellKind::general: {
-        GeneralNode g = decode_general(ed_.pool(), n.ptr[c], n.info[c]);
-        visit_general(g, cb, tc);
-        Brick b;
-        if (try_compact(g, b)) {
-          for (int k = 0; k < 8; ++k)
-            if (g.kind[k] == CellKind::general)
-              ed_.release(g.ptr[k], general_block_words(g.info[k]), false);
-          ed_.release(n.ptr[c], general_block_words(n.info[c]), false);
-          n.kind[c] = CellKind::brick;
-          n.ptr[c] = store_brick(b, 0);
-          ++stats.bricks_compacted;
-        } else {
-          store_general(g, n.ptr[c], n.info[c], n.ptr[c], n.info[c]);
-        }
-        break;
-      }
-      case CellKind::brick: {
-        Brick b = decode_brick(ed_.pool(), n.ptr[c]);
-        if (level + 2 < depth_) {
-          const uint32_t old_ptr = n.ptr[c] & ~octree::kBrickDoubleFlag;
-          GeneralNode g = explode(b, cb);
-          ed_.release(old_ptr, brick_block_words(b.mask, b.dbl), true);
-          visit_general(g, cb, tc);
-          n.kind[c] = CellKind::general;
-          store_general(g, 0, 0, n.ptr[c], n.info[c]);
-        } else {
-          // A brick the visit leaves as it was (its texels already as strong from an earlier
-          // dab of the stroke, or out of the brush's reach) is not averaged, encoded and
-          // written again: the same words would come out.
-          const Brick before = b;
-          visit_brick(b, cb, tc);
-          if (!same_cells(before, b)) {
-            b.avg = brick_avg(b);
-            n.ptr[c] = store_brick(b, n.ptr[c]);
-          }
-        }
-        break;
-      }
-      case CellKind::empty:
-        break;
-    }
+  uint32_t todo = 0;
+  for (int c = 0; c < 8; ++c)
+    if (!tparts[size_t(c)].empty() && (want >> c & 1)) todo |= 1u << c;
+  if (tasks_ && nb.level <= depth_ - kTaskDepth - 1) {
+    visit_parts(w, n, kids, todo, tparts, full_split ? &full_parts : nullptr,
+                nb.level == depth_ - kTaskDepth - 1);
+  } else {
+    for (int c = 0; c < 8; ++c)
+      if (todo >> c & 1)
+        visit_child(w, n, c, kids[c], tparts[size_t(c)],
+                    full_split ? &full_parts[size_t(c)] : nullptr);
   }
-  if (painter_) painter_->flush();
-  n.avg = general_avg(n);
+  if (w.painter) w.painter->flush();
+  n.avg = general_avg(w, n);
+}
+
+Refiner::Shard& Refiner::shard(uint64_t key) {
+  std::lock_guard<std::mutex> lock(shard_mutex_);
+  std::unique_ptr<Shard>& s = shards_[key];
+  if (!s) s = std::make_unique<Shard>(), s->painter = painter_->shard(key);
+  return *s;
+}
+
+namespace {
+
+void add(RefineStats& to, const RefineStats& a) {
+  to.leaves_created += a.leaves_created, to.bricks_created += a.bricks_created;
+  to.generals_created += a.generals_created, to.bricks_exploded += a.bricks_exploded;
+  to.bricks_compacted += a.bricks_compacted, to.leaves_painted += a.leaves_painted;
+  to.tasks += a.tasks, to.tasks_threaded += a.tasks_threaded;
+}
+
+}  // namespace
+
+SharedPool<Refiner::Ctx>& Refiner::ctx_pool() {
+  static SharedPool<Ctx> pool;
+  return pool;
+}
+
+SharedPool<Refiner::Log>& Refiner::log_pool() {
+  static SharedPool<Log> pool;
+  return pool;
+}
+
+Refiner::Ctx& Refiner::take_ctx() {
+  return ctx_pool().take();
+}
+void Refiner::put_ctx(Ctx& w) {
+  ctx_pool().put(w);
+}
+Refiner::Log& Refiner::take_log() {
+  return log_pool().take();
+}
+void Refiner::put_log(Log& l) {
+  log_pool().put(l);
+}
+
+void Refiner::Log::index(uint32_t temp, uint32_t op) {
+  if (2 * (count + 1) > at.size()) {
+    std::vector<uint64_t> old = std::move(at);
+    at.assign(std::max<size_t>(64, 2 * old.size()), ~uint64_t(0));
+    count = 0;
+    for (uint64_t e : old)
+      if (e != ~uint64_t(0)) index(uint32_t(e >> 32), uint32_t(e));
+  }
+  size_t i = size_t(temp * 0x9e3779b9u) & (at.size() - 1);
+  while (at[i] != ~uint64_t(0)) i = (i + 1) & (at.size() - 1);
+  at[i] = uint64_t(temp) << 32 | op, ++count;
+}
+
+const Refiner::Log::Op* Refiner::Log::find(uint32_t temp) const {
+  if (at.empty()) return nullptr;
+  for (size_t i = size_t(temp * 0x9e3779b9u) & (at.size() - 1);; i = (i + 1) & (at.size() - 1)) {
+    if (at[i] == ~uint64_t(0)) return nullptr;
+    if (uint32_t(at[i] >> 32) == temp) return &ops[uint32_t(at[i])];
+  }
+}
+void Refiner::visit_parts(Ctx& w, GeneralNode& n, const CellBox kids[8], uint32_t todo,
+                          const Split& tparts, const Split* full_parts, bool task_cells) {
+  int cs[8], count = 0;
+  Shard* sh[8] = {};
+  for (int c = 0; c < 8; ++c) {
+    if (!(todo >> c & 1)) continue;
+    if (task_cells) {
+      const CellBox& cb = kids[c];
+      sh[count] = &shard(morton3(cb.x, cb.y, cb.z) | uint64_t(cb.level) << 48);
+    }
+    cs[count++] = c;
+  }
+  if (task_cells) w.stats.tasks += size_t(count);
+  auto visit = [&](Ctx& x, int i) {
+    const int c = cs[i];
+    visit_child(x, n, c, kids[c], tparts[size_t(c)],
+                full_parts ? &(*full_parts)[size_t(c)] : nullptr);
+  };
+  if (!w.log || count < 2) {
+    // One thread: the same visits in order, each task cell through its shard.
+    LeafPainter* const painter = w.painter;
+    Kept* const kept = w.kept;
+    for (int i = 0; i < count; ++i) {
+      if (sh[i]) w.painter = sh[i]->painter, w.kept = &sh[i]->kept;
+      visit(w, i);
+    }
+    w.painter = painter, w.kept = kept;
+    return;
+  }
+  if (task_cells) w.stats.tasks_threaded += size_t(count);
+  // Each child with a context and log of its own (a thread waiting for its children may run
+  // other tasks meanwhile, so contexts are not per thread); logs merged in child order, so
+  // the writes come out in the order one thread makes them.
+  Log* logs[8];
+  for (int i = 0; i < count; ++i) logs[i] = &take_log(), logs[i]->clear();
+  tbb::parallel_for(
+      tbb::blocked_range<int>(0, count, 1),
+      [&](const tbb::blocked_range<int>& r) {
+        for (int i = r.begin(); i < r.end(); ++i) {
+          Ctx& x = take_ctx();
+          x.log = logs[i], x.up = &w;
+          x.painter = sh[i] ? sh[i]->painter : nullptr;
+          x.kept = sh[i] ? &sh[i]->kept : &kept_;
+          visit(x, i);
+          {
+            std::lock_guard<std::mutex> lock(stats_mutex_);
+            add(task_stats_, x.stats);
+          }
+          x.stats = {}, x.log = nullptr, x.up = nullptr, x.painter = nullptr, x.kept = nullptr;
+          put_ctx(x);
+        }
+      },
+      tbb::simple_partitioner());
+  for (int i = 0; i < count; ++i) merge(*w.log, *logs[i]), put_log(*logs[i]);
+}
+
+void Refiner::visit_child(Ctx& w, GeneralNode& n, int c, const CellBox& cb,
+                          std::span<const uint32_t> tc, const std::vector<uint32_t>* full_c) {
+  const int level = cb.level;
+  std::vector<uint32_t>& full = w.scratch[size_t(level - 1)].full;
+  // The child's full list, from its parent's when known (no BVH query, and no triangles from
+  // outside the parent's box to test).
+  auto child_full = [&] {
+    if (full_c) {
+      full = *full_c;
+    } else {
+      full_tris(cb, tc, full);
+    }
+  };
+  if (n.kind[c] == CellKind::empty) {
+    child_full();
+    if (full.empty()) return;
+    n.kind[c] = CellKind::leaf;
+    n.leaf[c] = make_leaf(full, nullptr);
+    ++w.stats.leaves_created;
+  }
+  switch (n.kind[c]) {
+    case CellKind::leaf: {
+      if (level >= depth_) {
+        if (w.painter)
+          w.painter->paint(cb, n.leaf[c], tc, LeafPainter::kNoMemo), ++w.stats.leaves_painted;
+        break;
+      }
+      child_full();
+      // A cell the surface only grazes within the boxes' slack may have no sub-cell the surface
+      // meets once rounded: it stays a leaf.
+      if (level == depth_ - 2) {
+        Brick b;
+        if (!build_brick(w, cb, n.leaf[c], full, tc, b)) break;
+        n.kind[c] = CellKind::brick;
+        n.ptr[c] = store_brick(w, b, 0);
+      } else {
+        GeneralNode g = refine_leaf(w, cb, n.leaf[c], full);
+        bool any = false;
+        for (int k = 0; k < 8; ++k) any |= g.kind[k] != CellKind::empty;
+        if (!any) break;
+        visit_general(w, g, cb, tc, &full);
+        n.kind[c] = CellKind::general;
+        store_general(w, g, 0, 0, n.ptr[c], n.info[c]);
+      }
+      break;
+    }
+    case CellKind::general: {
+      // From the log when just stored by this task (an exploded brick's children).
+      uint32_t at = 0;
+      const std::span<const uint32_t> words = block(w, n.ptr[c], at);
+      GeneralNode g = decode_general(words, at, n.info[c]);
+      visit_general(w, g, cb, tc);
+      Brick b;
+      if (try_compact(w, g, b)) {
+        for (int k = 0; k < 8; ++k)
+          if (g.kind[k] == CellKind::general)
+            release(w, g.ptr[k], general_block_words(g.info[k]), false);
+        release(w, n.ptr[c], general_block_words(n.info[c]), false);
+        n.kind[c] = CellKind::brick;
+        n.ptr[c] = store_brick(w, b, 0);
+        ++w.stats.bricks_compacted;
+      } else {
+        store_general(w, g, n.ptr[c], n.info[c], n.ptr[c], n.info[c]);
+      }
+      break;
+    }
+    case CellKind::brick: {
+      uint32_t at = 0;
+      const std::span<const uint32_t> words = block(w, n.ptr[c] & ~octree::kBrickDoubleFlag, at);
+      Brick b = decode_brick(words, at | (n.ptr[c] & octree::kBrickDoubleFlag));
+      if (level + 2 < depth_) {
+        const uint32_t old_ptr = n.ptr[c] & ~octree::kBrickDoubleFlag;
+        GeneralNode g = explode(w, b, cb);
+        release(w, old_ptr, brick_block_words(b.mask, b.dbl), true);
+        visit_general(w, g, cb, tc);
+        n.kind[c] = CellKind::general;
+        store_general(w, g, 0, 0, n.ptr[c], n.info[c]);
+      } else {
+        // A brick the visit leaves as it was (its texels already as strong from an earlier
+        // dab of the stroke, or out of the brush's reach) is not averaged, encoded and
+        // written again: the same words would come out.
+        const Brick before = b;
+        visit_brick(w, b, cb, tc);
+        if (!same_cells(before, b)) {
+          b.avg = brick_avg(b);
+          n.ptr[c] = store_brick(w, b, n.ptr[c]);
+        }
+      }
+      break;
+    }
+    case CellKind::empty:
+      break;
+  }
 }
 
 void Refiner::run(const Region& region, std::span<const uint32_t> tris, int depth,
                   LeafPainter* painter) {
   region_ = region, depth_ = depth, painter_ = painter;
+  main_.painter = painter, main_.kept = &kept_;
+  tasks_ = false;
+  if (painter && painter->sharded()) {
+    tasks_ = depth - kTaskDepth - 1 >= 0;
+    if (tasks_) {
+      main_.painter = nullptr;  // every cell painted lies under a task cell
+    } else {
+      // Too shallow for tasks: one shard for everything.
+      Shard& s = shard(~uint64_t(0));
+      main_.painter = s.painter, main_.kept = &s.kept;
+    }
+  }
   const uint32_t ptr = ed_.word(0), info = ed_.word(1);
   GeneralNode root = octree::occupied(info) ? decode_general(ed_.pool(), ptr, info) : GeneralNode{};
   const CellBox rb = box(0, 0, 0, 0);
   std::vector<uint32_t> t0;
   filter(tris, rb, t0);
-  if (t0.empty()) return;
-  visit_general(root, rb, t0);
-  uint32_t nptr = 0, ninfo = 0;
-  bool any = false;
-  for (int c = 0; c < 8; ++c) any |= root.kind[c] != CellKind::empty;
-  if (!any) return;
-  store_general(root, ptr, info, nptr, ninfo);
-  ed_.set(0, nptr);
-  ed_.set(1, ninfo);
+  // On several threads every write waits in a log, replayed once the visit is over (reads of
+  // the pool meanwhile see it as it was); temporary addresses need room above the pool.
+  temp0_ = uint32_t(ed_.pool().size());
+  const bool threads =
+      tasks_ && temp0_ < octree::kMaxPoolWords / 2 && tbb::this_task_arena::max_concurrency() > 1 &&
+      tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism) > 1;
+  main_.log = threads ? &main_log_ : nullptr;
+  main_log_.clear();
+  next_temp_ = temp0_;
+  if (!t0.empty()) {
+    visit_general(main_, root, rb, t0);
+    bool any = false;
+    for (int c = 0; c < 8; ++c) any |= root.kind[c] != CellKind::empty;
+    if (any) {
+      uint32_t nptr = 0, ninfo = 0;
+      store_general(main_, root, ptr, info, nptr, ninfo);
+      if (main_.log) replay(*main_.log), nptr = resolve(nptr);
+      ed_.set(0, nptr);
+      ed_.set(1, ninfo);
+    }
+  }
+  main_.log = nullptr;
+  stats = main_.stats;
+  add(stats, task_stats_);
 }
 
 }  // namespace limn::detail

@@ -3,7 +3,10 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <cstdint>
+#include <memory>
+#include <mutex>
 #include <span>
 #include <unordered_map>
 #include <vector>
@@ -14,6 +17,25 @@
 #include "octree_blocks.hpp"
 
 namespace limn::detail {
+
+/// Objects kept for reuse, taken and given back from any thread.
+template <class T>
+struct SharedPool {
+  std::mutex m;
+  std::vector<std::unique_ptr<T>> all;
+  std::vector<T*> free;
+  T& take() {
+    std::lock_guard<std::mutex> lock(m);
+    if (free.empty()) return *all.emplace_back(std::make_unique<T>());
+    T* x = free.back();
+    free.pop_back();
+    return *x;
+  }
+  void put(T& x) {
+    std::lock_guard<std::mutex> lock(m);
+    free.push_back(&x);
+  }
+};
 
 /// A cell of the octree: its level, integer coordinates at that level, centre and half size.
 struct CellBox {
@@ -31,12 +53,22 @@ class LeafPainter {
   /// `tris`: every triangle (sorted) meeting the cell; may change `cell` (samples, or add the
   /// back sample). `memo`: with Refiner::keep_brick_lists, a number the refiner gives a brick's
   /// leaf it visits (not one it builds), the same for that cell, with the same `tris`, in every
-  /// run of that refiner and no other cell's; kNoMemo for other cells.
+  /// run of that refiner and no other cell's painted through this painter; kNoMemo for other
+  /// cells.
   virtual void paint(const CellBox& box, LeafCell& cell, std::span<const uint32_t> tris,
                      uint32_t memo) = 0;
   /// Finishes what `paint` left pending (cells painted since the last flush stay where they are
   /// until then). Called before a node's cells are stored or averaged.
   virtual void flush() {}
+  /// Whether this painter paints through shards (below); false: the run stays on the calling
+  /// thread and paints through this painter.
+  virtual bool sharded() const { return false; }
+  /// The painter of every cell inside the task cell `key` (level << 48 | Morton code, the same
+  /// cells for the same key in every run at one depth; ~0: every cell, for runs too shallow for
+  /// tasks), the same object for the same key for this painter's life, used by one thread at a
+  /// time; the refiner asks on its calling thread. What paint() writes must not be shared
+  /// between shards. Called only when sharded().
+  virtual LeafPainter* shard(uint64_t /*key*/) { return this; }
 };
 
 /// Where to refine and paint: everywhere, or cells meeting a ball.
@@ -49,6 +81,7 @@ struct Region {
 struct RefineStats {
   size_t leaves_created = 0, bricks_created = 0, generals_created = 0, bricks_exploded = 0,
          bricks_compacted = 0, leaves_painted = 0;
+  size_t tasks = 0, tasks_threaded = 0;  ///< task cells visited; of them, in parallel joins
 };
 
 class Refiner {
@@ -58,7 +91,10 @@ class Refiner {
   /// Refines every cell meeting `region` and touched by the surface down to level `depth`, then
   /// calls `painter` (may be null) on every leaf at level >= depth there. `tris`: a sorted list
   /// holding at least every triangle meeting a cell of the region at level >= depth - 2.
-  /// Precondition: 1 <= depth <= kMaxDepth.
+  /// With a painter that has shards (LeafPainter::shard) and depth >= kTaskDepth, the cells of
+  /// level depth - kTaskDepth are visited as tasks on TBB's threads, siblings at once; their
+  /// pool writes are replayed in the order one thread makes them, so the texture comes out the
+  /// same bit for bit on any number of threads. Precondition: 1 <= depth <= kMaxDepth.
   void run(const Region& region, std::span<const uint32_t> tris, int depth, LeafPainter* painter);
 
   /// The box of a cell.
@@ -117,9 +153,76 @@ class Refiner {
   /// mesh; off by default.
   void keep_brick_lists(bool on) { keep_ = on; }
 
+  /// Levels from a task's cell to the leaves (a task cell holds 2 x 2 x 2 bricks' cells).
+  static constexpr int kTaskDepth = 3;
+
   RefineStats stats;
 
  private:
+  /// Per brick (by level and Morton code) with keep_brick_lists: which leaves' lists are known
+  /// and where they are in `tris`.
+  struct KeptBrick {
+    uint64_t known = 0;
+    uint32_t off[64], len[64];
+  };
+  struct Kept {
+    std::unordered_map<uint64_t, uint32_t> index;
+    std::vector<KeptBrick> bricks;
+    std::vector<uint32_t> tris;
+  };
+  /// The pool writes of a run on several threads: recorded per task in order, appended to the
+  /// parent's log in child order after each join, replayed once at the end of the run, so the
+  /// pool comes out as one thread makes it. A block stored meanwhile is named by a temporary
+  /// address (temp0_ and up, above every address in the pool, one per store of the run), which
+  /// reads of it before the replay (averages, compaction, visits) find through the logs of the
+  /// task and the tasks waiting for it.
+  struct Log {
+    enum Kind : uint8_t { kStore, kRelease };
+    struct Op {
+      Kind kind;
+      bool brick;
+      uint8_t generals, bricks;  ///< a general node's child pointer words (pairs, then bricks)
+      uint32_t ptr, old_n;       ///< the block replaced or released (0: none), its size
+      uint32_t off, n;           ///< the new block's words in `words`
+      uint32_t temp;             ///< the new block's temporary address
+    };
+    std::vector<Op> ops;
+    std::vector<uint32_t> words;
+    /// Temporary address -> op: open addressing, linear probing (key << 32 | op; ~0 empty).
+    std::vector<uint64_t> at;
+    size_t count = 0;
+    void clear() {
+      ops.clear(), words.clear();
+      if (count) std::fill(at.begin(), at.end(), ~uint64_t(0));
+      count = 0;
+    }
+    void index(uint32_t temp, uint32_t op);
+    const Op* find(uint32_t temp) const;
+  };
+  /// What one thread's visit writes: per node level the lists it keeps while it recurses
+  /// below, the brick builder's lists, the encoder's words, counts; and the painter, kept
+  /// lists and log of the task it runs.
+  struct Scratch {
+    std::vector<uint32_t> full;
+    Split parts, full_parts;
+  };
+  struct Ctx {
+    std::array<Scratch, octree::kMaxDepth + 1> scratch;
+    Split brick1, brick2;       // a brick's two levels
+    std::vector<uint32_t> sub;  // one sub-cell's region list
+    std::vector<uint32_t> words;
+    RefineStats stats;
+    LeafPainter* painter = nullptr;
+    Kept* kept = nullptr;
+    Log* log = nullptr;       ///< null: writes go to the pool
+    const Ctx* up = nullptr;  ///< the context waiting for this one (its log is read, not written)
+  };
+  /// A task cell's own state across runs: its painter and kept lists.
+  struct Shard {
+    LeafPainter* painter = nullptr;
+    Kept kept;
+  };
+
   /// A cell's size at a level: the quotient divided out once per level.
   double cell_size(int level) const {
     return level >= 0 && level <= octree::kMaxDepth
@@ -140,29 +243,64 @@ class Refiner {
   /// `full` (may be null): every triangle meeting the node's box, when known (a node just made
   /// by refining): its children's lists are filtered from it instead of queried; then the
   /// node's scratch already holds full split by child (`full_parts`), as refine_leaf left it.
-  void visit_general(GeneralNode& n, const CellBox& nb, std::span<const uint32_t> tris,
+  void visit_general(Ctx& w, GeneralNode& n, const CellBox& nb, std::span<const uint32_t> tris,
                      const std::vector<uint32_t>* full = nullptr);
+  /// visit_general's work on child c (box cb, region list tc) of n: makes, refines, visits and
+  /// stores it, writing only n's slot c. full_c: the child's full list when n was just refined.
+  void visit_child(Ctx& w, GeneralNode& n, int c, const CellBox& cb, std::span<const uint32_t> tc,
+                   const std::vector<uint32_t>* full_c);
+  /// visit_child on the children in `todo` (bit c) of a node above the task cells (with
+  /// `task_cells`, its children are task cells: each visited through its shard): at once on
+  /// TBB's threads when writes are logged (a run on several threads) and there are several.
+  void visit_parts(Ctx& w, GeneralNode& n, const CellBox kids[8], uint32_t todo,
+                   const Split& tparts, const Split* full_parts, bool task_cells);
+  /// Appends `from` (a child's log) to `into`.
+  static void merge(Log& into, const Log& from);
+  /// Makes the log's writes in order.
+  void replay(const Log& log);
+  /// A temporary address's real one once replayed (real ones as they are).
+  uint32_t resolve(uint32_t p) const { return p >= temp0_ ? real_[p - temp0_] : p; }
+  uint32_t resolve_brick(uint32_t word) const {
+    return resolve(word & ~octree::kBrickDoubleFlag) | (word & octree::kBrickDoubleFlag);
+  }
+  /// Contexts and logs of tasks, from pools every refiner shares (kept warm across strokes:
+  /// a click is a stroke of its own).
+  static SharedPool<Ctx>& ctx_pool();
+  static SharedPool<Log>& log_pool();
+  static Ctx& take_ctx();
+  static void put_ctx(Ctx& w);
+  static Log& take_log();
+  static void put_log(Log& l);
+  /// The task cell `key`'s shard (made on first use; any thread).
+  Shard& shard(uint64_t key);
   /// Paints b's leaves in the region; b.avg is left for the caller (stale if a cell changed).
-  void visit_brick(Brick& b, const CellBox& bb, std::span<const uint32_t> tris);
+  void visit_brick(Ctx& w, Brick& b, const CellBox& bb, std::span<const uint32_t> tris);
   /// A new general node for the leaf cell `cb` (refined one level); leaves full split by child
   /// in cb's scratch (`full_parts`).
-  GeneralNode refine_leaf(const CellBox& cb, const LeafCell& leaf, std::span<const uint32_t> full);
+  GeneralNode refine_leaf(Ctx& w, const CellBox& cb, const LeafCell& leaf,
+                          std::span<const uint32_t> full);
   /// A new brick for the leaf cell `cb` (two levels), visited at once: what make-then-visit
   /// did, with the region's lists taken from the full ones (`tris`, the region's list for cb,
   /// is a subset of `full`) instead of split again. False (b.mask 0) when no sub-cell meets
   /// the surface.
-  bool build_brick(const CellBox& cb, const LeafCell& leaf, std::span<const uint32_t> full,
+  bool build_brick(Ctx& w, const CellBox& cb, const LeafCell& leaf, std::span<const uint32_t> full,
                    std::span<const uint32_t> tris, Brick& b);
-  GeneralNode explode(const Brick& b, const CellBox& bb);
+  GeneralNode explode(Ctx& w, const Brick& b, const CellBox& bb);
   /// Encodes and stores a node; returns (ptr, info). `old_ptr` 0: new.
-  void store_general(const GeneralNode& n, uint32_t old_ptr, uint32_t old_info, uint32_t& ptr,
-                     uint32_t& info);
-  uint32_t store_brick(const Brick& b, uint32_t old_word);
-  Rgba8 child_avg(const GeneralNode& n, int c) const;
-  Rgba8 general_avg(const GeneralNode& n) const;
+  void store_general(Ctx& w, const GeneralNode& n, uint32_t old_ptr, uint32_t old_info,
+                     uint32_t& ptr, uint32_t& info);
+  uint32_t store_brick(Ctx& w, const Brick& b, uint32_t old_word);
+  /// ed_.replace_block, or its record in w's log (a temporary address).
+  uint32_t put_block(Ctx& w, uint32_t old_ptr, uint32_t old_n, bool brick, int generals,
+                     int bricks);
+  void release(Ctx& w, uint32_t ptr, uint32_t n, bool brick);
+  /// The words holding block `ptr` (pool or log) and the block's position in them.
+  std::span<const uint32_t> block(const Ctx& w, uint32_t ptr, uint32_t& at) const;
+  Rgba8 child_avg(const Ctx& w, const GeneralNode& n, int c) const;
+  Rgba8 general_avg(const Ctx& w, const GeneralNode& n) const;
   static Rgba8 brick_avg(const Brick& b);
   /// A general node whose cells are all leaf-only general nodes becomes a brick.
-  bool try_compact(const GeneralNode& n, Brick& out) const;
+  bool try_compact(const Ctx& w, const GeneralNode& n, Brick& out) const;
 
   OctreeEditor ed_;
   const PaintSurface& s_;
@@ -172,25 +310,17 @@ class Refiner {
   int depth_ = 0;
   LeafPainter* painter_ = nullptr;
   float slack_ = 0;
-  std::vector<uint32_t> words_;
-  /// Per node level: lists a visit keeps while it recurses below.
-  struct Scratch {
-    std::vector<uint32_t> full;
-    Split parts, full_parts;
-  };
-  std::array<Scratch, octree::kMaxDepth + 1> scratch_;
-  Split brick1_, brick2_;      // a brick's two levels
-  std::vector<uint32_t> sub_;  // one sub-cell's region list
-  /// keep_brick_lists: per brick (by level and Morton code), which leaves' lists are known and
-  /// where they are in kept_tris_.
-  struct KeptBrick {
-    uint64_t known = 0;
-    uint32_t off[64], len[64];
-  };
   bool keep_ = false;
-  std::unordered_map<uint64_t, uint32_t> kept_index_;
-  std::vector<KeptBrick> kept_;
-  std::vector<uint32_t> kept_tris_;
+  bool tasks_ = false;  // this run visits task cells (a sharded painter, deep enough)
+  Ctx main_;            // the calling thread's
+  Log main_log_;
+  std::mutex shard_mutex_, stats_mutex_;
+  RefineStats task_stats_;  // the tasks' counts, added as each ends
+  Kept kept_;               // without shards
+  std::unordered_map<uint64_t, std::unique_ptr<Shard>> shards_;
+  uint32_t temp0_ = 0;  // the pool's size at the run's start: temporary addresses start there
+  std::atomic<uint32_t> next_temp_{0};
+  std::vector<uint32_t> real_;  // per temporary address, its block's address once replayed
 };
 
 }  // namespace limn::detail

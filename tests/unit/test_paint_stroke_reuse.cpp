@@ -1,8 +1,11 @@
 // Reuse across the dabs of a stroke (StrokePainter::set_reuse): what a stroke keeps from one dab
 // to the next (each brick's leaf triangle lists, each texel's nearest surface point) must never
 // change a result. The reference is the same strokes painted with reuse off, on a texture of its
-// own: every pool word, every stroke's counts, and undo/redo back to the exact bytes.
+// own: every pool word, every stroke's counts, and undo/redo back to the exact bytes. The same
+// holds for threads: a dab's task cells painted on many threads against the same strokes on one.
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 
 #include <cmath>
 #include <cstdint>
@@ -182,6 +185,64 @@ TEST(PaintStrokeReuse, UndoAndRedoGiveBackTheExactBytes) {
   EXPECT_EQ(words(t), words(t2));
   ASSERT_TRUE(h.undo(t));
   EXPECT_EQ(words(t), before[before.size() - 2]);
+}
+
+TEST(PaintThreads, SameBytesOnOneThreadAndOnFour) {
+  // Both passes of every stroke (the second over built bricks, in reverse order), reuse on and
+  // off, world and screen strokes, depths 8 and 9: on four threads (more than this machine may
+  // have: TBB oversubscribes) against one, every pool word, free list, count and undo step.
+  const Mesh m = scene();
+  const PaintSurface s(m);
+  const PaintCamera cam = camera();
+  tbb::global_control allow(tbb::global_control::max_allowed_parallelism, 4);
+  tbb::task_arena one(1), four(4);
+  OctreeTexture a = OctreeTexture::create(s), b = OctreeTexture::create(s);
+  PaintHistory ha, hb;
+  std::vector<Stroke> all = strokes();
+  size_t threaded = 0, tasks = 0;
+  std::vector<std::vector<uint32_t>> before;
+  for (int pass = 0; pass < 2; ++pass)
+    for (size_t i = 0; i < all.size(); ++i) {
+      Stroke st = all[pass ? all.size() - 1 - i : i];
+      st.brush.color[0] = pass ? 0.3f : 0.6f;
+      const bool reuse = (i + size_t(pass)) % 2 == 0;
+      std::vector<uint32_t> was = words(b);
+      StrokeStats ra, rb;
+      auto run = [&](OctreeTexture& t, PaintHistory& h, StrokeStats& r) {
+        StrokePainter p(t, s, &h);
+        p.set_reuse(reuse);
+        p.begin(st.brush, st.xy.empty() ? nullptr : &cam);
+        if (st.xy.empty())
+          p.stroke_world(st.xyz);
+        else
+          p.stroke_screen(st.xy);
+        r = p.end();
+      };
+      one.execute([&] { run(a, ha, ra); });
+      four.execute([&] { run(b, hb, rb); });
+      EXPECT_EQ(ra.dabs, rb.dabs);
+      EXPECT_EQ(ra.samples_changed, rb.samples_changed);
+      EXPECT_EQ(ra.rays, rb.rays);
+      EXPECT_EQ(ra.leaves_created, rb.leaves_created);
+      EXPECT_EQ(ra.nodes_created, rb.nodes_created);
+      EXPECT_EQ(ra.tasks, rb.tasks);
+      EXPECT_EQ(ra.tasks_threaded, 0u);
+      ASSERT_TRUE(a == b) << "pass " << pass << " stroke " << i;
+      ASSERT_EQ(b.check(), "");
+      threaded += rb.tasks_threaded, tasks += rb.tasks;
+      // A stroke that changed nothing leaves no undo step.
+      if (words(b) != was) before.push_back(std::move(was));
+    }
+  // The threads did the painting: most task cells were visited beside siblings.
+  EXPECT_GT(tasks, 1000u);
+  EXPECT_GT(threaded, tasks / 2);
+  // Undo on the threaded texture steps back through the same bytes.
+  ASSERT_GT(before.size(), 8u);
+  for (size_t i = before.size(); i-- > 0;) {
+    ASSERT_TRUE(hb.undo(b));
+    ASSERT_EQ(words(b), before[i]) << "undo " << i;
+  }
+  EXPECT_FALSE(hb.undo(b));
 }
 
 }  // namespace

@@ -42,7 +42,10 @@ struct StrokeStats {
   size_t samples_changed = 0;  ///< sample writes that changed a colour
   size_t leaves_created = 0, bricks_created = 0, nodes_created = 0;
   size_t rays = 0;  ///< occlusion rays cast
-  double ms = 0;    ///< wall time of the stroke
+  /// Task cells the dabs visited (cells 2^3 leaves wide, each painted by one thread), and of
+  /// them those visited on TBB's threads beside their siblings.
+  size_t tasks = 0, tasks_threaded = 0;
+  double ms = 0;  ///< wall time of the stroke
 };
 
 /// Throws InputError naming `what` when a field of the brush is out of range or not finite.
@@ -50,7 +53,8 @@ void check_brush(const Brush& b, const char* what);
 
 /// Paints strokes: begin, dabs (or whole polylines), end. Within a stroke, a texel takes the
 /// strongest weight any dab gave it (opacity is a ceiling, not a build-up), so the result does
-/// not depend on the spacing. Not thread-safe.
+/// not depend on the spacing. A dab's cells are painted on TBB's threads (the texture comes out
+/// the same bit for bit on any number of them); one painter is not to be called from two threads.
 class StrokePainter {
  public:
   /// `history` (may be null) records each stroke for undo.
