@@ -42,7 +42,7 @@ struct StrokeStats {
   size_t samples_changed = 0;  ///< sample writes that changed a colour
   size_t leaves_created = 0, bricks_created = 0, nodes_created = 0;
   size_t rays = 0;  ///< occlusion rays cast
-  /// Task cells the dabs visited (cells 2^3 leaves wide, each painted by one thread), and of
+  /// Task cells the dabs visited (cells 2^4 leaves wide, each painted by one thread), and of
   /// them those visited on TBB's threads beside their siblings.
   size_t tasks = 0, tasks_threaded = 0;
   double ms = 0;  ///< wall time of the stroke
