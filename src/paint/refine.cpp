@@ -555,24 +555,26 @@ void Refiner::put_log(Log& l) {
 
 void Refiner::Log::index(uint32_t temp, uint32_t op) {
   if (2 * (count + 1) > at.size()) {
-    std::vector<uint64_t> old = std::move(at);
-    at.assign(std::max<size_t>(64, 2 * old.size()), ~uint64_t(0));
-    count = 0;
-    for (uint64_t e : old)
-      if (e != ~uint64_t(0)) index(uint32_t(e >> 32), uint32_t(e));
+    std::vector<uint64_t> old;
+    for (size_t i = 0; i < at.size(); ++i)
+      if (stamp[i] == gen) old.push_back(at[i]);
+    const size_t size = std::max<size_t>(64, 2 * at.size());
+    at.assign(size, 0), stamp.assign(size, 0u), gen = 1, count = 0;
+    for (uint64_t e : old) index(uint32_t(e >> 32), uint32_t(e));
   }
   size_t i = size_t(temp * 0x9e3779b9u) & (at.size() - 1);
-  while (at[i] != ~uint64_t(0)) i = (i + 1) & (at.size() - 1);
-  at[i] = uint64_t(temp) << 32 | op, ++count;
+  while (stamp[i] == gen) i = (i + 1) & (at.size() - 1);
+  at[i] = uint64_t(temp) << 32 | op, stamp[i] = gen, ++count;
 }
 
 const Refiner::Log::Op* Refiner::Log::find(uint32_t temp) const {
   if (at.empty()) return nullptr;
   for (size_t i = size_t(temp * 0x9e3779b9u) & (at.size() - 1);; i = (i + 1) & (at.size() - 1)) {
-    if (at[i] == ~uint64_t(0)) return nullptr;
+    if (stamp[i] != gen) return nullptr;
     if (uint32_t(at[i] >> 32) == temp) return &ops[uint32_t(at[i])];
   }
 }
+
 void Refiner::visit_parts(Ctx& w, GeneralNode& n, const CellBox kids[8], uint32_t todo,
                           const Split& tparts, const Split* full_parts, bool task_cells) {
   int cs[8], count = 0;

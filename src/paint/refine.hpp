@@ -192,13 +192,16 @@ class Refiner {
     };
     std::vector<Op> ops;
     std::vector<uint32_t> words;
-    /// Temporary address -> op: open addressing, linear probing (key << 32 | op; ~0 empty).
+    /// Temporary address -> op: open addressing, linear probing (key << 32 | op), a slot in use
+    /// when its stamp is the log's generation, so clearing costs nothing (logs are reused, and
+    /// a log that once held a whole run's writes has a large table).
     std::vector<uint64_t> at;
+    std::vector<uint32_t> stamp;
+    uint32_t gen = 1;
     size_t count = 0;
     void clear() {
-      ops.clear(), words.clear();
-      if (count) std::fill(at.begin(), at.end(), ~uint64_t(0));
-      count = 0;
+      ops.clear(), words.clear(), count = 0;
+      if (++gen == 0) std::fill(stamp.begin(), stamp.end(), 0u), gen = 1;
     }
     void index(uint32_t temp, uint32_t op);
     const Op* find(uint32_t temp) const;
