@@ -1,7 +1,9 @@
 // limn command-line tool: composes the library layers; no algorithm lives here.
 #include <fmt/format.h>
+#include <tbb/global_control.h>
 
 #include <cstdio>
+#include <memory>
 
 #include "common.hpp"
 #include "limn/version.hpp"
@@ -12,6 +14,18 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", std::string("limn ") + limn::version());
   app.require_subcommand(1);
   app.fallthrough(false);
+  // Before the subcommand (whose work runs as it is parsed): results are the same on any number
+  // of threads; this only caps how many work at once.
+  std::unique_ptr<tbb::global_control> threads;
+  app.add_option_function<int>(
+         "--threads",
+         [&](int n) {
+           threads = std::make_unique<tbb::global_control>(
+               tbb::global_control::max_allowed_parallelism, size_t(n));
+         },
+         "Threads at most (default: every core); results do not depend on it")
+      ->check(CLI::Range(1, 1024))
+      ->trigger_on_parse();
   limn::cli::add_info(app);
   limn::cli::add_convert(app);
   limn::cli::add_shape(app);

@@ -197,6 +197,32 @@ TEST_F(PaintCli, ScreenStrokesUndoPickAndAPngBake) {
   EXPECT_EQ(slurp(png).substr(1, 3), "PNG");
 }
 
+TEST_F(PaintCli, ThreadsCapLeavesTheTextureAsItIs) {
+  // A dab's cells are painted on several threads; --threads 1 must write the same bytes.
+  const fs::path mesh = dir_ / "torus.obj";
+  ASSERT_EQ(limn("shape torus -o " + q(mesh)).code, 0);
+  const fs::path strokes = write("s.json", R"({"strokes": [{"points": [[1.0, 0.0, 0.3],
+    [0.7, 0.7, 0.3], [0.0, 1.0, 0.3]], "radius": 0.15, "color": [1, 0, 0, 1], "opacity": 1.0,
+    "hardness": 0.5, "space": "world"}]})");
+  std::string bytes[3];
+  const char* caps[3] = {"--threads 1 ", "--threads 4 ", ""};
+  for (int i = 0; i < 3; ++i) {
+    const fs::path tex = dir_ / ("t" + std::to_string(i) + ".lot");
+    const Result r = limn(std::string(caps[i]) + "paint " + q(mesh) + " --strokes " + q(strokes) +
+                          " -o " + q(tex) + " --depth 9 --json");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_GT(nlohmann::json::parse(r.out)["samples_changed"].get<int>(), 10000);
+    bytes[i] = slurp(tex);
+  }
+  EXPECT_EQ(bytes[0], bytes[1]);
+  EXPECT_EQ(bytes[0], bytes[2]);
+  const Result bad = limn("--threads 0 paint " + q(mesh) + " --strokes " + q(strokes) + " -o " +
+                          q(dir_ / "bad.lot"));
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_THAT(bad.err, HasSubstr("--threads"));
+  EXPECT_FALSE(fs::exists(dir_ / "bad.lot"));
+}
+
 TEST_F(PaintCli, BadStrokeScriptsExitTwoAndLeaveThePreviousOutput) {
   const std::vector<std::pair<std::string, std::string>> bad = {
       {"not json", "{\"strokes\": [}"},
