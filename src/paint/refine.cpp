@@ -729,47 +729,66 @@ void Refiner::visit_child(Ctx& w, GeneralNode& n, int c, const CellBox& cb,
 void Refiner::run(const Region& region, std::span<const uint32_t> tris, int depth,
                   LeafPainter* painter) {
   region_ = region, depth_ = depth, painter_ = painter;
-  main_.painter = painter, main_.kept = &kept_;
-  tasks_ = false;
-  if (painter && painter->sharded()) {
-    tasks_ = depth - kTaskDepth - 1 >= 0;
-    if (tasks_) {
-      main_.painter = nullptr;  // every cell painted lies under a task cell
-    } else {
-      // Too shallow for tasks: one shard for everything.
-      Shard& s = shard(~uint64_t(0));
-      main_.painter = s.painter, main_.kept = &s.kept;
+  {
+    // The calling thread's context, from the shared pool too: a click's refiner is made and
+    // dropped per dab, and a warm context saves its lists' allocations.
+    struct Taken {
+      Ctx& w;
+      RefineStats& into;
+      std::mutex& m;
+      ~Taken() {
+        {
+          std::lock_guard<std::mutex> lock(m);
+          add(into, w.stats);
+        }
+        w.stats = {}, w.log = nullptr, w.painter = nullptr, w.kept = nullptr;
+        put_ctx(w);
+      }
+    } taken{take_ctx(), task_stats_, stats_mutex_};
+    Ctx& main = taken.w;
+    main.painter = painter, main.kept = &kept_;
+    tasks_ = false;
+    if (painter && painter->sharded()) {
+      tasks_ = depth - kTaskDepth - 1 >= 0;
+      if (tasks_) {
+        main.painter = nullptr;  // every cell painted lies under a task cell
+      } else {
+        // Too shallow for tasks: one shard for everything.
+        Shard& s = shard(~uint64_t(0));
+        main.painter = s.painter, main.kept = &s.kept;
+      }
     }
-  }
-  const uint32_t ptr = ed_.word(0), info = ed_.word(1);
-  GeneralNode root = octree::occupied(info) ? decode_general(ed_.pool(), ptr, info) : GeneralNode{};
-  const CellBox rb = box(0, 0, 0, 0);
-  std::vector<uint32_t> t0;
-  filter(tris, rb, t0);
-  // On several threads every write waits in a log, replayed once the visit is over (reads of
-  // the pool meanwhile see it as it was); temporary addresses need room above the pool.
-  temp0_ = uint32_t(ed_.pool().size());
-  const bool threads =
-      tasks_ && temp0_ < octree::kMaxPoolWords / 2 && tbb::this_task_arena::max_concurrency() > 1 &&
-      tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism) > 1;
-  main_.log = threads ? &main_log_ : nullptr;
-  main_log_.clear();
-  next_temp_ = temp0_;
-  if (!t0.empty()) {
-    visit_general(main_, root, rb, t0);
-    bool any = false;
-    for (int c = 0; c < 8; ++c) any |= root.kind[c] != CellKind::empty;
-    if (any) {
-      uint32_t nptr = 0, ninfo = 0;
-      store_general(main_, root, ptr, info, nptr, ninfo);
-      if (main_.log) replay(*main_.log), nptr = resolve(nptr);
-      ed_.set(0, nptr);
-      ed_.set(1, ninfo);
+    const uint32_t ptr = ed_.word(0), info = ed_.word(1);
+    GeneralNode root =
+        octree::occupied(info) ? decode_general(ed_.pool(), ptr, info) : GeneralNode{};
+    const CellBox rb = box(0, 0, 0, 0);
+    std::vector<uint32_t> t0;
+    filter(tris, rb, t0);
+    // On several threads every write waits in a log, replayed once the visit is over (reads of
+    // the pool meanwhile see it as it was); temporary addresses need room above the pool.
+    temp0_ = uint32_t(ed_.pool().size());
+    const bool threads =
+        tasks_ && temp0_ < octree::kMaxPoolWords / 2 &&
+        tbb::this_task_arena::max_concurrency() > 1 &&
+        tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism) > 1;
+    main.log = threads ? &main_log_ : nullptr;
+    main_log_.clear();
+    next_temp_ = temp0_;
+    if (!t0.empty()) {
+      visit_general(main, root, rb, t0);
+      bool any = false;
+      for (int c = 0; c < 8; ++c) any |= root.kind[c] != CellKind::empty;
+      if (any) {
+        uint32_t nptr = 0, ninfo = 0;
+        store_general(main, root, ptr, info, nptr, ninfo);
+        if (main.log) replay(*main.log), nptr = resolve(nptr);
+        ed_.set(0, nptr);
+        ed_.set(1, ninfo);
+      }
     }
+    main.log = nullptr;
   }
-  main_.log = nullptr;
-  stats = main_.stats;
-  add(stats, task_stats_);
+  stats = task_stats_;
 }
 
 }  // namespace limn::detail

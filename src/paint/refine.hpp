@@ -319,10 +319,9 @@ class Refiner {
   float slack_ = 0;
   bool keep_ = false;
   bool tasks_ = false;  // this run visits task cells (a sharded painter, deep enough)
-  Ctx main_;            // the calling thread's
   Log main_log_;
   std::mutex shard_mutex_, stats_mutex_;
-  RefineStats task_stats_;  // the tasks' counts, added as each ends
+  RefineStats task_stats_;  // every context's counts, added as each goes back
   Kept kept_;               // without shards
   std::unordered_map<uint64_t, std::unique_ptr<Shard>> shards_;
   uint32_t temp0_ = 0;  // the pool's size at the run's start: temporary addresses start there
