@@ -33,7 +33,8 @@
 // (after each pass), to check that a change leaves results bit for bit as they were;
 // --cpu-clock: lookup and dab times in thread CPU time instead of wall time (for a busy
 // machine); --reps:
-// lookup repetitions (3); --threads: TBB's threads for the dabs (1; above 1, wall time even with
+// lookup repetitions (3); --threads: TBB's threads for painting (the dab tables and Table 1's
+// adaptive strokes; 1; above 1, wall time even with
 // --cpu-clock; lookups stay single-threaded, the table's builds too).
 #include <fmt/format.h>
 #include <tbb/global_control.h>

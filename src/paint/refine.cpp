@@ -137,15 +137,43 @@ void Refiner::split(std::span<const uint32_t> in, const CellBox& b, const CellBo
     split_loop_generic(s_, in, b.c, kx, ky, kz, kh, slack_, want, out);
 }
 
+namespace {
+
+// Lists this long are tested in chunks on TBB's threads (a coarse cell's full list: thousands of
+// triangles, on the path every first dab over an area waits for).
+constexpr size_t kChunk = 512;
+
+}  // namespace
+
 void Refiner::full_tris(const CellBox& b, std::span<const uint32_t> region_tris,
-                        std::vector<uint32_t>& out) const {
+                        std::vector<uint32_t>& out, bool threads) const {
   if (region_.everything) {
     out.assign(region_tris.begin(), region_tris.end());
     return;
   }
   out.clear();
   const float c[3] = {b.c.x, b.c.y, b.c.z};
-  s_.triangles_in_box(c, b.h, slack_, out);
+  if (!threads) {
+    s_.triangles_in_box(c, b.h, slack_, out);
+    return;
+  }
+  // triangles_in_box's answer: the same ball's candidates (degenerate ones dropped), the same
+  // box test, sorted; the tests in chunks at once.
+  std::vector<uint32_t> cand;
+  s_.triangles_near(c, (b.h + slack_) * 1.7320508f * 1.0001f, cand);
+  const size_t chunks = (cand.size() + kChunk - 1) / kChunk;
+  std::vector<std::vector<uint32_t>> kept(chunks);
+  tbb::parallel_for(size_t(0), chunks, [&](size_t i) {
+    for (size_t k = i * kChunk; k < std::min(cand.size(), (i + 1) * kChunk); ++k) {
+      const uint32_t t = cand[k];
+      if (tri_meets_box(b.c, b.h, v3(s_.corner(t, 0)), v3(s_.corner(t, 1)), v3(s_.corner(t, 2)),
+                        slack_))
+        kept[i].push_back(t);
+    }
+  });
+  for (const std::vector<uint32_t>& k : kept) out.insert(out.end(), k.begin(), k.end());
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
 }
 
 LeafCell Refiner::make_leaf(std::span<const uint32_t> tris, const LeafCell* parent) const {
@@ -281,7 +309,25 @@ GeneralNode Refiner::refine_leaf(Ctx& w, const CellBox& cb, const LeafCell& leaf
                                  std::span<const uint32_t> full) {
   GeneralNode g;
   Split& parts = w.scratch[size_t(cb.level)].full_parts;
-  split(full, cb, parts);
+  if (w.log && full.size() >= 2 * kChunk) {
+    // A coarse cell's list in chunks at once, each chunk's parts appended in chunk order: the
+    // lists one split makes.
+    CellBox kids[8];
+    children(cb, kids);
+    const size_t chunks = (full.size() + kChunk - 1) / kChunk;
+    std::vector<Split> part(chunks);
+    tbb::parallel_for(size_t(0), chunks, [&](size_t i) {
+      const size_t lo = i * kChunk, hi = std::min(full.size(), lo + kChunk);
+      split(full.subspan(lo, hi - lo), cb, kids, part[i]);
+    });
+    for (int c = 0; c < 8; ++c) {
+      parts[size_t(c)].clear();
+      for (const Split& p : part)
+        parts[size_t(c)].insert(parts[size_t(c)].end(), p[size_t(c)].begin(), p[size_t(c)].end());
+    }
+  } else {
+    split(full, cb, parts);
+  }
   for (int c = 0; c < 8; ++c) {
     const std::vector<uint32_t>& fc = parts[size_t(c)];
     if (fc.empty()) continue;
@@ -641,7 +687,8 @@ void Refiner::visit_child(Ctx& w, GeneralNode& n, int c, const CellBox& cb,
     if (full_c) {
       full = *full_c;
     } else {
-      full_tris(cb, tc, full);
+      // Above the task cells a cell is coarse: its box tests on the threads.
+      full_tris(cb, tc, full, w.log && level < depth_ - kTaskDepth);
     }
   };
   if (n.kind[c] == CellKind::empty) {

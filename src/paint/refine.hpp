@@ -245,8 +245,9 @@ class Refiner {
   bool within(const CellBox& b) const;
   /// Which of b's children (`kids`) meet the region (bit c: child c).
   uint32_t meeting(const CellBox kids[8]) const;
+  /// Every triangle meeting b (sorted); `threads`: the box tests on TBB's threads.
   void full_tris(const CellBox& b, std::span<const uint32_t> region_tris,
-                 std::vector<uint32_t>& out) const;
+                 std::vector<uint32_t>& out, bool threads) const;
   /// `full` (may be null): every triangle meeting the node's box, when known (a node just made
   /// by refining): its children's lists are filtered from it instead of queried; then the
   /// node's scratch already holds full split by child (`full_parts`), as refine_leaf left it.
