@@ -197,14 +197,12 @@ LeafCell Refiner::make_leaf(std::span<const uint32_t> tris, const LeafCell* pare
 
 std::span<const uint32_t> Refiner::block(const Ctx& w, uint32_t ptr, uint32_t& at) const {
   if (w.log && ptr >= temp0_) {
-    for (const Ctx* x = &w; x; x = x->up) {
-      if (!x->log) continue;
-      const Log::Op* op = x->log->find(ptr);
-      if (!op) continue;
-      at = 0;
-      return std::span<const uint32_t>(x->log->words).subspan(op->off, op->n);
-    }
-    throw std::logic_error("octree refiner: a temporary block address not in any log");
+    // Stored earlier by this task or one it waits for or has joined: ordered before this read.
+    const Where& at_log = where_[ptr - temp0_];
+    if (!at_log.log) throw std::logic_error("octree refiner: a temporary address not logged");
+    const Log::Op& op = at_log.log->ops[at_log.op];
+    at = 0;
+    return std::span<const uint32_t>(at_log.log->words).subspan(op.off, op.n);
   }
   at = ptr;
   return ed_.pool();
@@ -245,9 +243,10 @@ uint32_t Refiner::put_block(Ctx& w, uint32_t old_ptr, uint32_t old_n, bool brick
   op.generals = uint8_t(generals), op.bricks = uint8_t(bricks);
   op.ptr = old_ptr, op.old_n = old_n;
   op.off = uint32_t(log.words.size()), op.n = uint32_t(w.words.size());
-  op.temp = next_temp_.fetch_add(1, std::memory_order_relaxed);
   log.words.insert(log.words.end(), w.words.begin(), w.words.end());
-  log.index(op.temp, uint32_t(log.ops.size()));
+  // The slot's index is the address: each slot written once, whole, by the thread adding it.
+  const auto slot = where_.push_back({&log, uint32_t(log.ops.size())});
+  op.temp = temp0_ + uint32_t(slot - where_.begin());
   log.ops.push_back(op);
   return op.temp;
 }
@@ -259,19 +258,13 @@ void Refiner::release(Ctx& w, uint32_t ptr, uint32_t n, bool brick) {
   w.log->ops.push_back(op);
 }
 
-void Refiner::merge(Log& into, const Log& from) {
-  const uint32_t woff = uint32_t(into.words.size());
-  into.words.insert(into.words.end(), from.words.begin(), from.words.end());
-  for (Log::Op op : from.ops) {
-    if (op.kind == Log::kStore) op.off += woff, into.index(op.temp, uint32_t(into.ops.size()));
-    into.ops.push_back(op);
-  }
-}
-
 void Refiner::replay(const Log& log) {
-  real_.assign(next_temp_.load() - temp0_, 0);
   std::vector<uint32_t> words;
   for (const Log::Op& op : log.ops) {
+    if (op.kind == Log::kChild) {
+      replay(*log.children[op.off]);
+      continue;
+    }
     if (op.kind == Log::kRelease) {
       ed_.release(resolve(op.ptr), op.old_n, op.brick);
       continue;
@@ -599,28 +592,6 @@ void Refiner::put_log(Log& l) {
   log_pool().put(l);
 }
 
-void Refiner::Log::index(uint32_t temp, uint32_t op) {
-  if (2 * (count + 1) > at.size()) {
-    std::vector<uint64_t> old;
-    for (size_t i = 0; i < at.size(); ++i)
-      if (stamp[i] == gen) old.push_back(at[i]);
-    const size_t size = std::max<size_t>(64, 2 * at.size());
-    at.assign(size, 0), stamp.assign(size, 0u), gen = 1, count = 0;
-    for (uint64_t e : old) index(uint32_t(e >> 32), uint32_t(e));
-  }
-  size_t i = size_t(temp * 0x9e3779b9u) & (at.size() - 1);
-  while (stamp[i] == gen) i = (i + 1) & (at.size() - 1);
-  at[i] = uint64_t(temp) << 32 | op, stamp[i] = gen, ++count;
-}
-
-const Refiner::Log::Op* Refiner::Log::find(uint32_t temp) const {
-  if (at.empty()) return nullptr;
-  for (size_t i = size_t(temp * 0x9e3779b9u) & (at.size() - 1);; i = (i + 1) & (at.size() - 1)) {
-    if (stamp[i] != gen) return nullptr;
-    if (uint32_t(at[i] >> 32) == temp) return &ops[uint32_t(at[i])];
-  }
-}
-
 void Refiner::visit_parts(Ctx& w, GeneralNode& n, const CellBox kids[8], uint32_t todo,
                           const Split& tparts, const Split* full_parts, bool task_cells) {
   int cs[8], count = 0;
@@ -655,13 +626,17 @@ void Refiner::visit_parts(Ctx& w, GeneralNode& n, const CellBox kids[8], uint32_
   // other tasks meanwhile, so contexts are not per thread); logs merged in child order, so
   // the writes come out in the order one thread makes them.
   Log* logs[8];
-  for (int i = 0; i < count; ++i) logs[i] = &take_log(), logs[i]->clear();
+  {
+    std::lock_guard<std::mutex> lock(logs_mutex_);
+    for (int i = 0; i < count; ++i)
+      logs[i] = &take_log(), logs[i]->clear(), taken_logs_.push_back(logs[i]);
+  }
   tbb::parallel_for(
       tbb::blocked_range<int>(0, count, 1),
       [&](const tbb::blocked_range<int>& r) {
         for (int i = r.begin(); i < r.end(); ++i) {
           Ctx& x = take_ctx();
-          x.log = logs[i], x.up = &w;
+          x.log = logs[i];
           x.painter = sh[i] ? sh[i]->painter : nullptr;
           x.kept = sh[i] ? &sh[i]->kept : &kept_;
           visit(x, i);
@@ -669,12 +644,18 @@ void Refiner::visit_parts(Ctx& w, GeneralNode& n, const CellBox kids[8], uint32_
             std::lock_guard<std::mutex> lock(stats_mutex_);
             add(task_stats_, x.stats);
           }
-          x.stats = {}, x.log = nullptr, x.up = nullptr, x.painter = nullptr, x.kept = nullptr;
+          x.stats = {}, x.log = nullptr, x.painter = nullptr, x.kept = nullptr;
           put_ctx(x);
         }
       },
       tbb::simple_partitioner());
-  for (int i = 0; i < count; ++i) merge(*w.log, *logs[i]), put_log(*logs[i]);
+  // Each child's writes where one thread would make them: after what w wrote before the join.
+  for (int i = 0; i < count; ++i) {
+    Log::Op op{};
+    op.kind = Log::kChild, op.off = uint32_t(w.log->children.size());
+    w.log->children.push_back(logs[i]);
+    w.log->ops.push_back(op);
+  }
 }
 
 void Refiner::visit_child(Ctx& w, GeneralNode& n, int c, const CellBox& cb,
@@ -773,8 +754,15 @@ void Refiner::visit_child(Ctx& w, GeneralNode& n, int c, const CellBox& cb,
   }
 }
 
+void Refiner::give_back_logs() {
+  for (Log* l : taken_logs_) l->clear(), put_log(*l);
+  taken_logs_.clear();
+  where_.clear();
+}
+
 void Refiner::run(const Region& region, std::span<const uint32_t> tris, int depth,
                   LeafPainter* painter) {
+  give_back_logs();  // those of a run a throw cut short
   region_ = region, depth_ = depth, painter_ = painter;
   {
     // The calling thread's context, from the shared pool too: a click's refiner is made and
@@ -820,7 +808,7 @@ void Refiner::run(const Region& region, std::span<const uint32_t> tris, int dept
         tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism) > 1;
     main.log = threads ? &main_log_ : nullptr;
     main_log_.clear();
-    next_temp_ = temp0_;
+    where_.clear();
     if (!t0.empty()) {
       visit_general(main, root, rb, t0);
       bool any = false;
@@ -828,13 +816,18 @@ void Refiner::run(const Region& region, std::span<const uint32_t> tris, int dept
       if (any) {
         uint32_t nptr = 0, ninfo = 0;
         store_general(main, root, ptr, info, nptr, ninfo);
-        if (main.log) replay(*main.log), nptr = resolve(nptr);
+        if (main.log) {
+          real_.assign(where_.size(), 0);
+          replay(*main.log);
+          nptr = resolve(nptr);
+        }
         ed_.set(0, nptr);
         ed_.set(1, ninfo);
       }
     }
     main.log = nullptr;
   }
+  give_back_logs();
   stats = task_stats_;
 }
 

@@ -3,13 +3,14 @@
 #pragma once
 
 #include <array>
-#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <mutex>
 #include <span>
 #include <unordered_map>
 #include <vector>
+
+#include <tbb/concurrent_vector.h>
 
 #include "geometry.hpp"
 #include "limn/paint/surface.hpp"
@@ -87,6 +88,9 @@ struct RefineStats {
 class Refiner {
  public:
   Refiner(OctreeTexture& t, const PaintSurface& s);
+  ~Refiner() { give_back_logs(); }
+  Refiner(const Refiner&) = delete;
+  Refiner& operator=(const Refiner&) = delete;
 
   /// Refines every cell meeting `region` and touched by the surface down to level `depth`, then
   /// calls `painter` (may be null) on every leaf at level >= depth there. `tris`: a sorted list
@@ -174,37 +178,31 @@ class Refiner {
     std::vector<KeptBrick> bricks;
     std::vector<uint32_t> tris;
   };
-  /// The pool writes of a run on several threads: recorded per task in order, appended to the
-  /// parent's log in child order after each join, replayed once at the end of the run, so the
-  /// pool comes out as one thread makes it. A block stored meanwhile is named by a temporary
-  /// address (temp0_ and up, above every address in the pool, one per store of the run), which
-  /// reads of it before the replay (averages, compaction, visits) find through the logs of the
-  /// task and the tasks waiting for it.
+  /// The pool writes of a run on several threads: recorded per task in order, a child task's
+  /// log hung into its parent's at the join in child order, the tree replayed once at the end
+  /// of the run, so the pool comes out as one thread writes it. A block stored meanwhile is
+  /// named by a temporary address (temp0_ and up, above every address in the pool, one per
+  /// store of the run), which reads of it before the replay (averages, compaction, visits)
+  /// find through `where_`.
   struct Log {
-    enum Kind : uint8_t { kStore, kRelease };
+    enum Kind : uint8_t { kStore, kRelease, kChild };
     struct Op {
       Kind kind;
       bool brick;
       uint8_t generals, bricks;  ///< a general node's child pointer words (pairs, then bricks)
       uint32_t ptr, old_n;       ///< the block replaced or released (0: none), its size
-      uint32_t off, n;           ///< the new block's words in `words`
+      uint32_t off, n;           ///< the new block's words in `words`; kChild: children[off]
       uint32_t temp;             ///< the new block's temporary address
     };
     std::vector<Op> ops;
     std::vector<uint32_t> words;
-    /// Temporary address -> op: open addressing, linear probing (key << 32 | op), a slot in use
-    /// when its stamp is the log's generation, so clearing costs nothing (logs are reused, and
-    /// a log that once held a whole run's writes has a large table).
-    std::vector<uint64_t> at;
-    std::vector<uint32_t> stamp;
-    uint32_t gen = 1;
-    size_t count = 0;
-    void clear() {
-      ops.clear(), words.clear(), count = 0;
-      if (++gen == 0) std::fill(stamp.begin(), stamp.end(), 0u), gen = 1;
-    }
-    void index(uint32_t temp, uint32_t op);
-    const Op* find(uint32_t temp) const;
+    std::vector<Log*> children;
+    void clear() { ops.clear(), words.clear(), children.clear(); }
+  };
+  /// Where a temporary address's block is: its log and op.
+  struct Where {
+    const Log* log = nullptr;
+    uint32_t op = 0;
   };
   /// What one thread's visit writes: per node level the lists it keeps while it recurses
   /// below, the brick builder's lists, the encoder's words, counts; and the painter, kept
@@ -262,9 +260,7 @@ class Refiner {
   /// TBB's threads when writes are logged (a run on several threads) and there are several.
   void visit_parts(Ctx& w, GeneralNode& n, const CellBox kids[8], uint32_t todo,
                    const Split& tparts, const Split* full_parts, bool task_cells);
-  /// Appends `from` (a child's log) to `into`.
-  static void merge(Log& into, const Log& from);
-  /// Makes the log's writes in order.
+  /// Makes the log's writes in order, its children's where they hang.
   void replay(const Log& log);
   /// A temporary address's real one once replayed (real ones as they are).
   uint32_t resolve(uint32_t p) const { return p >= temp0_ ? real_[p - temp0_] : p; }
@@ -279,6 +275,8 @@ class Refiner {
   static void put_ctx(Ctx& w);
   static Log& take_log();
   static void put_log(Log& l);
+  /// The run's task logs back to the pool, once replayed.
+  void give_back_logs();
   /// The task cell `key`'s shard (made on first use; any thread).
   Shard& shard(uint64_t key);
   /// Paints b's leaves in the region; b.avg is left for the caller (stale if a cell changed).
@@ -326,8 +324,10 @@ class Refiner {
   Kept kept_;               // without shards
   std::unordered_map<uint64_t, std::unique_ptr<Shard>> shards_;
   uint32_t temp0_ = 0;  // the pool's size at the run's start: temporary addresses start there
-  std::atomic<uint32_t> next_temp_{0};
-  std::vector<uint32_t> real_;  // per temporary address, its block's address once replayed
+  tbb::concurrent_vector<Where> where_;  // per temporary address
+  std::mutex logs_mutex_;
+  std::vector<Log*> taken_logs_;  // the run's task logs, given back after the replay
+  std::vector<uint32_t> real_;    // per temporary address, its block's address once replayed
 };
 
 }  // namespace limn::detail
