@@ -8,6 +8,7 @@
 #include <cmath>
 #include <memory>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "limn/paint/lookup.hpp"
@@ -591,11 +592,25 @@ struct FillPainter : LeafPainter {
   BlendMode mode;
   float opacity;
   size_t changed = 0;
+  // Per task cell a painter of its own (its count), so a fill runs on TBB's threads.
+  std::unordered_map<uint64_t, std::unique_ptr<FillPainter>> shards;
   void paint(const CellBox&, LeafCell& cell, std::span<const uint32_t>, uint32_t) override {
     for (int side = 0; side < (cell.dbl ? 2 : 1); ++side) {
       const Rgba8 nc = blend(cell.s[side], color, mode, opacity);
       if (nc != cell.s[side]) cell.s[side] = nc, ++changed;
     }
+  }
+  bool sharded() const override { return true; }
+  LeafPainter* shard(uint64_t key) override {
+    std::unique_ptr<FillPainter>& p = shards[key];
+    if (!p)
+      p = std::make_unique<FillPainter>(), p->color = color, p->mode = mode, p->opacity = opacity;
+    return p.get();
+  }
+  size_t total() const {
+    size_t n = changed;
+    for (const auto& [key, p] : shards) n += p->total();
+    return n;
   }
 };
 
@@ -614,7 +629,7 @@ size_t fill(OctreeTexture& t, const PaintSurface& s, const float color[4], Blend
     Refiner r(t, s);
     const std::vector<uint32_t> all = all_triangles(s);
     r.run(Region{}, all, depth, &p);
-    return p.changed;
+    return p.total();
   }
   std::vector<std::pair<size_t, Rgba8>> writes;
   t.for_each_sample([&](const OctreeSample& x) {

@@ -598,7 +598,7 @@ void Refiner::visit_parts(Ctx& w, GeneralNode& n, const CellBox kids[8], uint32_
   Shard* sh[8] = {};
   for (int c = 0; c < 8; ++c) {
     if (!(todo >> c & 1)) continue;
-    if (task_cells) {
+    if (task_cells && painter_) {
       const CellBox& cb = kids[c];
       sh[count] = &shard(morton3(cb.x, cb.y, cb.z) | uint64_t(cb.level) << 48);
     }
@@ -783,7 +783,9 @@ void Refiner::run(const Region& region, std::span<const uint32_t> tris, int dept
     Ctx& main = taken.w;
     main.painter = painter, main.kept = &kept_;
     tasks_ = false;
-    if (painter && painter->sharded()) {
+    if (!painter) {
+      tasks_ = depth - kTaskDepth - 1 >= 0;  // refining only: no shards to keep apart
+    } else if (painter->sharded()) {
       tasks_ = depth - kTaskDepth - 1 >= 0;
       if (tasks_) {
         main.painter = nullptr;  // every cell painted lies under a task cell

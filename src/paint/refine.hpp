@@ -95,11 +95,12 @@ class Refiner {
   /// Refines every cell meeting `region` and touched by the surface down to level `depth`, then
   /// calls `painter` (may be null) on every leaf at level >= depth there. `tris`: a sorted list
   /// holding at least every triangle meeting a cell of the region at level >= depth - 2.
-  /// With a painter that has shards (LeafPainter::shard) and depth > kTaskDepth, each cell of
-  /// level depth - kTaskDepth is painted through its own shard, and on several threads the
-  /// cells meeting the region are visited as tasks, siblings at once at every level down to
+  /// With no painter or one that has shards (LeafPainter::shard), and depth > kTaskDepth, each
+  /// cell of level depth - kTaskDepth is painted through its own shard, and on several threads
+  /// the cells meeting the region are visited as tasks, siblings at once at every level down to
   /// those; their pool writes are replayed in the order one thread makes them, so the texture
-  /// comes out the same bit for bit on any number of threads. Precondition: 1 <= depth <=
+  /// comes out the same bit for bit on any number of threads (a whole-surface run holds its
+  /// writes, about the pool's size again, until then). Precondition: 1 <= depth <=
   /// kMaxDepth.
   void run(const Region& region, std::span<const uint32_t> tris, int depth, LeafPainter* painter);
 

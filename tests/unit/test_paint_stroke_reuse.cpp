@@ -245,5 +245,31 @@ TEST(PaintThreads, SameBytesOnOneThreadAndOnFour) {
   EXPECT_FALSE(hb.undo(b));
 }
 
+TEST(PaintThreads, RefiningAndFillingTheWholeSurfaceGiveTheSameBytes) {
+  // Whole-surface runs (refine_surface, fill at a depth) over painted strokes: on four threads
+  // against one, pool, free lists and counts.
+  const Mesh m = scene();
+  const PaintSurface s(m);
+  const PaintCamera cam = camera();
+  tbb::global_control allow(tbb::global_control::max_allowed_parallelism, 4);
+  tbb::task_arena one(1), four(4);
+  OctreeTexture a = OctreeTexture::create(s), b = OctreeTexture::create(s);
+  const std::vector<Stroke> all = strokes();
+  auto work = [&](OctreeTexture& t, size_t& filled) {
+    paint(t, s, all[0], true, &cam, nullptr);
+    refine_surface(t, s, 7);
+    const float grey[4] = {0.5f, 0.5f, 0.5f, 1.0f};
+    filled = fill(t, s, grey, BlendMode::mix, 0.5f, 8);
+    paint(t, s, all[2], false, &cam, nullptr);  // depth 9 over it all
+  };
+  size_t fa = 0, fb = 0;
+  one.execute([&] { work(a, fa); });
+  four.execute([&] { work(b, fb); });
+  EXPECT_GT(fa, 100000u);
+  EXPECT_EQ(fa, fb);
+  EXPECT_TRUE(a == b);
+  EXPECT_EQ(b.check(), "");
+}
+
 }  // namespace
 }  // namespace limn

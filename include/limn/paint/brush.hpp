@@ -97,11 +97,13 @@ class StrokePainter {
 };
 
 /// Refines every surface cell to level `depth` (no colour change): the full ("regular") octree of
-/// the surface in the adaptive layout. O(surface cells at depth).
+/// the surface in the adaptive layout. O(surface cells at depth); on TBB's threads, the same
+/// texture on any number of them.
 void refine_surface(OctreeTexture& t, const PaintSurface& s, int depth);
 
 /// Blends `color` into every sample (fill): after refining the whole surface to `depth` when
-/// depth > 0, else at the resolution each region already has. Returns the samples changed.
+/// depth > 0 (on TBB's threads, as refine_surface), else at the resolution each region already
+/// has. Returns the samples changed.
 size_t fill(OctreeTexture& t, const PaintSurface& s, const float color[4], BlendMode mode,
             float opacity, int depth = 0);
 
