@@ -33,9 +33,9 @@
 // (after each pass), to check that a change leaves results bit for bit as they were;
 // --cpu-clock: lookup and dab times in thread CPU time instead of wall time (for a busy
 // machine); --reps:
-// lookup repetitions (3); --threads: TBB's threads for painting (the dab tables and Table 1's
-// adaptive strokes; 1; above 1, wall time even with
-// --cpu-clock; lookups stay single-threaded, the table's builds too).
+// lookup repetitions (3); --threads: TBB's threads for painting and refining (the dab tables,
+// Table 1's adaptive strokes and limn full builds; 1; above 1, wall time even with --cpu-clock);
+// the dense, regular and OpenVDB builds and the lookups stay on one thread.
 #include <fmt/format.h>
 #include <tbb/global_control.h>
 
