@@ -1,7 +1,10 @@
 // limn paint: runs a stroke script (docs/paint-strokes.md) on a mesh into an adaptive octree
 // texture (.lot), or prints a texture's counts and sizes (--stats).
 #include <fmt/format.h>
+#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <sstream>
@@ -105,11 +108,13 @@ void run_paint(const PaintOpts& o) {
   save_lot(tex, o.out);
   const double t_save = sw.lap();
 
-  size_t dabs = 0, missed = 0, changed = 0, leaves = 0, bricks = 0, rays = 0;
+  size_t dabs = 0, missed = 0, changed = 0, leaves = 0, bricks = 0, rays = 0, tasks = 0,
+         threaded = 0;
   double stroke_ms = 0;
   for (const StrokeStats& s : r.strokes) {
     dabs += s.dabs, missed += s.dabs_missed, changed += s.samples_changed;
     leaves += s.leaves_created, bricks += s.bricks_created, rays += s.rays, stroke_ms += s.ms;
+    tasks += s.tasks, threaded += s.tasks_threaded;
   }
   if (o.json) {
     nlohmann::json picks = nlohmann::json::array();
@@ -130,6 +135,13 @@ void run_paint(const PaintOpts& o) {
                         {"bricks_created", bricks},
                         {"occlusion_rays", rays},
                         {"ms_per_dab", dabs ? stroke_ms / double(dabs) : 0.0},
+                        // Task cells the dabs visited, and of them those on TBB's threads.
+                        {"threads",
+                         {{"max", std::min(size_t(tbb::this_task_arena::max_concurrency()),
+                                           tbb::global_control::active_value(
+                                               tbb::global_control::max_allowed_parallelism))},
+                          {"task_cells", tasks},
+                          {"task_cells_threaded", threaded}}},
                         {"undos", r.undos},
                         {"redos", r.redos},
                         {"picks", picks},

@@ -211,7 +211,13 @@ TEST_F(PaintCli, ThreadsCapLeavesTheTextureAsItIs) {
     const Result r = limn(std::string(caps[i]) + "paint " + q(mesh) + " --strokes " + q(strokes) +
                           " -o " + q(tex) + " --depth 9 --json");
     ASSERT_EQ(r.code, 0) << r.err;
-    EXPECT_GT(nlohmann::json::parse(r.out)["samples_changed"].get<int>(), 10000);
+    const nlohmann::json j = nlohmann::json::parse(r.out);
+    EXPECT_GT(j["samples_changed"].get<int>(), 10000);
+    EXPECT_GT(j["threads"]["task_cells"].get<int>(), 0);
+    if (i == 0) {
+      EXPECT_EQ(j["threads"]["max"].get<int>(), 1);
+      EXPECT_EQ(j["threads"]["task_cells_threaded"].get<int>(), 0);
+    }
     bytes[i] = slurp(tex);
   }
   EXPECT_EQ(bytes[0], bytes[1]);
