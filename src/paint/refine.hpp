@@ -205,13 +205,14 @@ class Refiner {
     const Log* log = nullptr;
     uint32_t op = 0;
   };
-  /// What one thread's visit writes: per node level the lists it keeps while it recurses
-  /// below, the brick builder's lists, the encoder's words, counts; and the painter, kept
-  /// lists and log of the task it runs.
+  /// Per node level, the lists a visit keeps while it recurses below.
   struct Scratch {
     std::vector<uint32_t> full;
     Split parts, full_parts;
   };
+  /// What one task's visit writes (a task runs on one thread at a time): per level its lists,
+  /// the brick builder's lists, the encoder's words, counts; and the painter, kept lists and
+  /// log of the task.
   struct Ctx {
     std::array<Scratch, octree::kMaxDepth + 1> scratch;
     Split brick1, brick2;       // a brick's two levels
@@ -220,8 +221,7 @@ class Refiner {
     RefineStats stats;
     LeafPainter* painter = nullptr;
     Kept* kept = nullptr;
-    Log* log = nullptr;       ///< null: writes go to the pool
-    const Ctx* up = nullptr;  ///< the context waiting for this one (its log is read, not written)
+    Log* log = nullptr;  ///< null: writes go to the pool
   };
   /// A task cell's own state across runs: its painter and kept lists.
   struct Shard {
@@ -318,7 +318,7 @@ class Refiner {
   LeafPainter* painter_ = nullptr;
   float slack_ = 0;
   bool keep_ = false;
-  bool tasks_ = false;  // this run visits task cells (a sharded painter, deep enough)
+  bool tasks_ = false;  // this run visits task cells (no painter or a sharded one; deep enough)
   Log main_log_;
   std::mutex shard_mutex_, stats_mutex_;
   RefineStats task_stats_;  // every context's counts, added as each goes back
