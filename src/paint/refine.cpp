@@ -569,13 +569,14 @@ void add(RefineStats& to, const RefineStats& a) {
 
 }  // namespace
 
+// Never destroyed: a refiner that outlives main() (a painter in a static) still gives back.
 SharedPool<Refiner::Ctx>& Refiner::ctx_pool() {
-  static SharedPool<Ctx> pool;
+  static SharedPool<Ctx>& pool = *new SharedPool<Ctx>;
   return pool;
 }
 
 SharedPool<Refiner::Log>& Refiner::log_pool() {
-  static SharedPool<Log> pool;
+  static SharedPool<Log>& pool = *new SharedPool<Log>;
   return pool;
 }
 
