@@ -298,6 +298,31 @@ uint32_t Refiner::store_brick(Ctx& w, const Brick& b, uint32_t old_word) {
   return put_block(w, old_ptr, old_n, true, 0, 0) | flag;
 }
 
+GeneralNode Refiner::refine_leaf_queried(Ctx& w, const CellBox& cb, const LeafCell& leaf) {
+  GeneralNode g;
+  Split& parts = w.scratch[size_t(cb.level)].full_parts;
+  CellBox kids[8];
+  children(cb, kids);
+  auto query = [&](int c) {
+    const float kc[3] = {kids[c].c.x, kids[c].c.y, kids[c].c.z};
+    parts[size_t(c)].clear();
+    s_.triangles_in_box(kc, kids[c].h, slack_, parts[size_t(c)]);
+  };
+  if (w.log)
+    tbb::parallel_for(0, 8, query);
+  else
+    for (int c = 0; c < 8; ++c) query(c);
+  for (int c = 0; c < 8; ++c) {
+    const std::vector<uint32_t>& fc = parts[size_t(c)];
+    if (fc.empty()) continue;
+    g.kind[c] = CellKind::leaf;
+    g.leaf[c] = make_leaf(fc, &leaf);
+    ++w.stats.leaves_created;
+  }
+  ++w.stats.generals_created;
+  return g;
+}
+
 GeneralNode Refiner::refine_leaf(Ctx& w, const CellBox& cb, const LeafCell& leaf,
                                  std::span<const uint32_t> full) {
   GeneralNode g;
@@ -685,6 +710,20 @@ void Refiner::visit_child(Ctx& w, GeneralNode& n, int c, const CellBox& cb,
       if (level >= depth_) {
         if (w.painter)
           w.painter->paint(cb, n.leaf[c], tc, LeafPainter::kNoMemo), ++w.stats.leaves_painted;
+        break;
+      }
+      // A leaf with no list at hand (made by an earlier run) that becomes a general node: its
+      // children's lists straight from the BVH, at once on the threads, instead of its own
+      // list queried and then split.
+      if (!full_c && level < depth_ - 2 && !region_.everything) {
+        GeneralNode g = refine_leaf_queried(w, cb, n.leaf[c]);
+        bool any = false;
+        for (int k = 0; k < 8; ++k) any |= g.kind[k] != CellKind::empty;
+        if (!any) break;
+        full.clear();  // its children's lists are in full_parts; `same` is then false
+        visit_general(w, g, cb, tc, &full);
+        n.kind[c] = CellKind::general;
+        store_general(w, g, 0, 0, n.ptr[c], n.info[c]);
         break;
       }
       child_full();

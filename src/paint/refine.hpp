@@ -286,6 +286,8 @@ class Refiner {
   /// in cb's scratch (`full_parts`).
   GeneralNode refine_leaf(Ctx& w, const CellBox& cb, const LeafCell& leaf,
                           std::span<const uint32_t> full);
+  /// The same from the BVH: each child's list queried (at once on the threads with a log).
+  GeneralNode refine_leaf_queried(Ctx& w, const CellBox& cb, const LeafCell& leaf);
   /// A new brick for the leaf cell `cb` (two levels), visited at once: what make-then-visit
   /// did, with the region's lists taken from the full ones (`tris`, the region's list for cb,
   /// is a subset of `full`) instead of split again. False (b.mask 0) when no sub-cell meets
