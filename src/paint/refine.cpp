@@ -139,41 +139,21 @@ void Refiner::split(std::span<const uint32_t> in, const CellBox& b, const CellBo
 
 namespace {
 
-// Lists this long are tested in chunks on TBB's threads (a coarse cell's full list: thousands of
+// Lists this long are split in chunks on TBB's threads (a coarse cell's full list: thousands of
 // triangles, on the path every first dab over an area waits for).
 constexpr size_t kChunk = 512;
 
 }  // namespace
 
 void Refiner::full_tris(const CellBox& b, std::span<const uint32_t> region_tris,
-                        std::vector<uint32_t>& out, bool threads) const {
+                        std::vector<uint32_t>& out) const {
   if (region_.everything) {
     out.assign(region_tris.begin(), region_tris.end());
     return;
   }
   out.clear();
   const float c[3] = {b.c.x, b.c.y, b.c.z};
-  if (!threads) {
-    s_.triangles_in_box(c, b.h, slack_, out);
-    return;
-  }
-  // triangles_in_box's answer: the same ball's candidates (degenerate ones dropped), the same
-  // box test, sorted; the tests in chunks at once.
-  std::vector<uint32_t> cand;
-  s_.triangles_near(c, (b.h + slack_) * 1.7320508f * 1.0001f, cand);
-  const size_t chunks = (cand.size() + kChunk - 1) / kChunk;
-  std::vector<std::vector<uint32_t>> kept(chunks);
-  tbb::parallel_for(size_t(0), chunks, [&](size_t i) {
-    for (size_t k = i * kChunk; k < std::min(cand.size(), (i + 1) * kChunk); ++k) {
-      const uint32_t t = cand[k];
-      if (tri_meets_box(b.c, b.h, v3(s_.corner(t, 0)), v3(s_.corner(t, 1)), v3(s_.corner(t, 2)),
-                        slack_))
-        kept[i].push_back(t);
-    }
-  });
-  for (const std::vector<uint32_t>& k : kept) out.insert(out.end(), k.begin(), k.end());
-  std::sort(out.begin(), out.end());
-  out.erase(std::unique(out.begin(), out.end()), out.end());
+  s_.triangles_in_box(c, b.h, slack_, out);
 }
 
 LeafCell Refiner::make_leaf(std::span<const uint32_t> tris, const LeafCell* parent) const {
@@ -258,8 +238,7 @@ void Refiner::release(Ctx& w, uint32_t ptr, uint32_t n, bool brick) {
   w.log->ops.push_back(op);
 }
 
-void Refiner::replay(const Log& log) {
-  std::vector<uint32_t> words;
+void Refiner::replay(Log& log) {
   for (const Log::Op& op : log.ops) {
     if (op.kind == Log::kChild) {
       replay(*log.children[op.off]);
@@ -269,7 +248,7 @@ void Refiner::replay(const Log& log) {
       ed_.release(resolve(op.ptr), op.old_n, op.brick);
       continue;
     }
-    words.assign(log.words.begin() + op.off, log.words.begin() + op.off + op.n);
+    const std::span<uint32_t> words = std::span<uint32_t>(log.words).subspan(op.off, op.n);
     for (uint32_t k = 0; k < op.generals; ++k) words[2 * k] = resolve(words[2 * k]);
     for (uint32_t k = 0; k < op.bricks; ++k)
       words[2 * op.generals + k] = resolve_brick(words[2 * op.generals + k]);
@@ -298,40 +277,28 @@ uint32_t Refiner::store_brick(Ctx& w, const Brick& b, uint32_t old_word) {
   return put_block(w, old_ptr, old_n, true, 0, 0) | flag;
 }
 
-GeneralNode Refiner::refine_leaf_queried(Ctx& w, const CellBox& cb, const LeafCell& leaf) {
+GeneralNode Refiner::refine_leaf(Ctx& w, const CellBox& cb, const LeafCell& leaf,
+                                 const std::vector<uint32_t>* full_list) {
   GeneralNode g;
   Split& parts = w.scratch[size_t(cb.level)].full_parts;
   CellBox kids[8];
   children(cb, kids);
-  auto query = [&](int c) {
-    const float kc[3] = {kids[c].c.x, kids[c].c.y, kids[c].c.z};
-    parts[size_t(c)].clear();
-    s_.triangles_in_box(kc, kids[c].h, slack_, parts[size_t(c)]);
-  };
-  if (w.log)
-    tbb::parallel_for(0, 8, query);
-  else
-    for (int c = 0; c < 8; ++c) query(c);
-  for (int c = 0; c < 8; ++c) {
-    const std::vector<uint32_t>& fc = parts[size_t(c)];
-    if (fc.empty()) continue;
-    g.kind[c] = CellKind::leaf;
-    g.leaf[c] = make_leaf(fc, &leaf);
-    ++w.stats.leaves_created;
-  }
-  ++w.stats.generals_created;
-  return g;
-}
-
-GeneralNode Refiner::refine_leaf(Ctx& w, const CellBox& cb, const LeafCell& leaf,
-                                 std::span<const uint32_t> full) {
-  GeneralNode g;
-  Split& parts = w.scratch[size_t(cb.level)].full_parts;
-  if (w.log && full.size() >= 2 * kChunk) {
+  if (!full_list) {
+    // Each child's list from the BVH (at once on the threads with a log): the lists splitting
+    // the cell's own would give, without querying it first.
+    auto query = [&](int c) {
+      const float kc[3] = {kids[c].c.x, kids[c].c.y, kids[c].c.z};
+      parts[size_t(c)].clear();
+      s_.triangles_in_box(kc, kids[c].h, slack_, parts[size_t(c)]);
+    };
+    if (w.log)
+      tbb::parallel_for(0, 8, query);
+    else
+      for (int c = 0; c < 8; ++c) query(c);
+  } else if (const std::span<const uint32_t> full = *full_list;
+             w.log && full.size() >= 2 * kChunk) {
     // A coarse cell's list in chunks at once, each chunk's parts appended in chunk order: the
     // lists one split makes.
-    CellBox kids[8];
-    children(cb, kids);
     const size_t chunks = (full.size() + kChunk - 1) / kChunk;
     std::vector<Split> part(chunks);
     tbb::parallel_for(size_t(0), chunks, [&](size_t i) {
@@ -344,7 +311,7 @@ GeneralNode Refiner::refine_leaf(Ctx& w, const CellBox& cb, const LeafCell& leaf
         parts[size_t(c)].insert(parts[size_t(c)].end(), p[size_t(c)].begin(), p[size_t(c)].end());
     }
   } else {
-    split(full, cb, parts);
+    split(full, cb, kids, parts);
   }
   for (int c = 0; c < 8; ++c) {
     const std::vector<uint32_t>& fc = parts[size_t(c)];
@@ -694,8 +661,7 @@ void Refiner::visit_child(Ctx& w, GeneralNode& n, int c, const CellBox& cb,
     if (full_c) {
       full = *full_c;
     } else {
-      // Above the task cells a cell is coarse: its box tests on the threads.
-      full_tris(cb, tc, full, w.log && level < depth_ - kTaskDepth);
+      full_tris(cb, tc, full);
     }
   };
   if (n.kind[c] == CellKind::empty) {
@@ -712,21 +678,14 @@ void Refiner::visit_child(Ctx& w, GeneralNode& n, int c, const CellBox& cb,
           w.painter->paint(cb, n.leaf[c], tc, LeafPainter::kNoMemo), ++w.stats.leaves_painted;
         break;
       }
-      // A leaf with no list at hand (made by an earlier run) that becomes a general node: its
-      // children's lists straight from the BVH, at once on the threads, instead of its own
-      // list queried and then split.
-      if (!full_c && level < depth_ - 2 && !region_.everything) {
-        GeneralNode g = refine_leaf_queried(w, cb, n.leaf[c]);
-        bool any = false;
-        for (int k = 0; k < 8; ++k) any |= g.kind[k] != CellKind::empty;
-        if (!any) break;
-        full.clear();  // its children's lists are in full_parts; `same` is then false
-        visit_general(w, g, cb, tc, &full);
-        n.kind[c] = CellKind::general;
-        store_general(w, g, 0, 0, n.ptr[c], n.info[c]);
-        break;
-      }
-      child_full();
+      // A leaf with no list at hand (made by an earlier run) that becomes a general node takes
+      // its children's lists straight from the BVH, instead of its own list queried and then
+      // split; its own list then stays empty, so visit_general sees it as not `same`.
+      const bool queried = !full_c && level < depth_ - 2 && !region_.everything;
+      if (queried)
+        full.clear();
+      else
+        child_full();
       // A cell the surface only grazes within the boxes' slack may have no sub-cell the surface
       // meets once rounded: it stays a leaf.
       if (level == depth_ - 2) {
@@ -735,7 +694,7 @@ void Refiner::visit_child(Ctx& w, GeneralNode& n, int c, const CellBox& cb,
         n.kind[c] = CellKind::brick;
         n.ptr[c] = store_brick(w, b, 0);
       } else {
-        GeneralNode g = refine_leaf(w, cb, n.leaf[c], full);
+        GeneralNode g = refine_leaf(w, cb, n.leaf[c], queried ? nullptr : &full);
         bool any = false;
         for (int k = 0; k < 8; ++k) any |= g.kind[k] != CellKind::empty;
         if (!any) break;
@@ -850,7 +809,6 @@ void Refiner::run(const Region& region, std::span<const uint32_t> tris, int dept
         tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism) > 1;
     main.log = threads ? &main_log_ : nullptr;
     main_log_.clear();
-    where_.clear();
     if (!t0.empty()) {
       visit_general(main, root, rb, t0);
       bool any = false;

@@ -244,9 +244,8 @@ class Refiner {
   bool within(const CellBox& b) const;
   /// Which of b's children (`kids`) meet the region (bit c: child c).
   uint32_t meeting(const CellBox kids[8]) const;
-  /// Every triangle meeting b (sorted); `threads`: the box tests on TBB's threads.
   void full_tris(const CellBox& b, std::span<const uint32_t> region_tris,
-                 std::vector<uint32_t>& out, bool threads) const;
+                 std::vector<uint32_t>& out) const;
   /// `full` (may be null): every triangle meeting the node's box, when known (a node just made
   /// by refining): its children's lists are filtered from it instead of queried; then the
   /// node's scratch already holds full split by child (`full_parts`), as refine_leaf left it.
@@ -262,7 +261,7 @@ class Refiner {
   void visit_parts(Ctx& w, GeneralNode& n, const CellBox kids[8], uint32_t todo,
                    const Split& tparts, const Split* full_parts, bool task_cells);
   /// Makes the log's writes in order, its children's where they hang.
-  void replay(const Log& log);
+  void replay(Log& log);
   /// A temporary address's real one once replayed (real ones as they are).
   uint32_t resolve(uint32_t p) const { return p >= temp0_ ? real_[p - temp0_] : p; }
   uint32_t resolve_brick(uint32_t word) const {
@@ -282,12 +281,11 @@ class Refiner {
   Shard& shard(uint64_t key);
   /// Paints b's leaves in the region; b.avg is left for the caller (stale if a cell changed).
   void visit_brick(Ctx& w, Brick& b, const CellBox& bb, std::span<const uint32_t> tris);
-  /// A new general node for the leaf cell `cb` (refined one level); leaves full split by child
-  /// in cb's scratch (`full_parts`).
+  /// A new general node for the leaf cell `cb` (refined one level); leaves its full list split
+  /// by child in cb's scratch (`full_parts`). `full` null: the children's lists come from the
+  /// BVH instead (the same lists), at once on the threads with a log.
   GeneralNode refine_leaf(Ctx& w, const CellBox& cb, const LeafCell& leaf,
-                          std::span<const uint32_t> full);
-  /// The same from the BVH: each child's list queried (at once on the threads with a log).
-  GeneralNode refine_leaf_queried(Ctx& w, const CellBox& cb, const LeafCell& leaf);
+                          const std::vector<uint32_t>* full);
   /// A new brick for the leaf cell `cb` (two levels), visited at once: what make-then-visit
   /// did, with the region's lists taken from the full ones (`tris`, the region's list for cb,
   /// is a subset of `full`) instead of split again. False (b.mask 0) when no sub-cell meets

@@ -47,8 +47,8 @@ struct Counts {
   bool operator==(const Counts&) const = default;
 };
 
-Counts paint(OctreeTexture& t, const PaintSurface& s, const Stroke& st, bool reuse,
-             const PaintCamera* cam, PaintHistory* h) {
+StrokeStats paint_stroke(OctreeTexture& t, const PaintSurface& s, const Stroke& st, bool reuse,
+                         const PaintCamera* cam, PaintHistory* h) {
   StrokePainter p(t, s, h);
   p.set_reuse(reuse);
   p.begin(st.brush, st.xy.empty() ? nullptr : cam);
@@ -56,7 +56,12 @@ Counts paint(OctreeTexture& t, const PaintSurface& s, const Stroke& st, bool reu
     p.stroke_world(st.xyz);
   else
     p.stroke_screen(st.xy);
-  const StrokeStats r = p.end();
+  return p.end();
+}
+
+Counts paint(OctreeTexture& t, const PaintSurface& s, const Stroke& st, bool reuse,
+             const PaintCamera* cam, PaintHistory* h) {
+  const StrokeStats r = paint_stroke(t, s, st, reuse, cam, h);
   return {r.dabs, r.samples_changed, r.rays, r.leaves_created, r.nodes_created};
 }
 
@@ -187,15 +192,21 @@ TEST(PaintStrokeReuse, UndoAndRedoGiveBackTheExactBytes) {
   EXPECT_EQ(words(t), before[before.size() - 2]);
 }
 
-TEST(PaintThreads, SameBytesOnOneThreadAndOnFour) {
-  // Both passes of every stroke (the second over built bricks, in reverse order), reuse on and
-  // off, world and screen strokes, depths 8 and 9: on four threads (more than this machine may
-  // have: TBB oversubscribes) against one, every pool word, free list, count and undo step.
+// The reuse tests' scene, and arenas of one and of four threads (more than this machine may have:
+// TBB oversubscribes).
+class PaintThreads : public ::testing::Test {
+ protected:
   const Mesh m = scene();
-  const PaintSurface s(m);
+  const PaintSurface s{m};
   const PaintCamera cam = camera();
-  tbb::global_control allow(tbb::global_control::max_allowed_parallelism, 4);
-  tbb::task_arena one(1), four(4);
+  tbb::global_control allow{tbb::global_control::max_allowed_parallelism, 4};
+  tbb::task_arena one{1}, four{4};
+};
+
+TEST_F(PaintThreads, SameBytesOnOneThreadAndOnFour) {
+  // Both passes of every stroke (the second over built bricks, in reverse order), reuse on and
+  // off, world and screen strokes, depths 8 and 9: on four threads against one, every pool
+  // word, free list, count and undo step.
   OctreeTexture a = OctreeTexture::create(s), b = OctreeTexture::create(s);
   PaintHistory ha, hb;
   std::vector<Stroke> all = strokes();
@@ -208,18 +219,8 @@ TEST(PaintThreads, SameBytesOnOneThreadAndOnFour) {
       const bool reuse = (i + size_t(pass)) % 2 == 0;
       std::vector<uint32_t> was = words(b);
       StrokeStats ra, rb;
-      auto run = [&](OctreeTexture& t, PaintHistory& h, StrokeStats& r) {
-        StrokePainter p(t, s, &h);
-        p.set_reuse(reuse);
-        p.begin(st.brush, st.xy.empty() ? nullptr : &cam);
-        if (st.xy.empty())
-          p.stroke_world(st.xyz);
-        else
-          p.stroke_screen(st.xy);
-        r = p.end();
-      };
-      one.execute([&] { run(a, ha, ra); });
-      four.execute([&] { run(b, hb, rb); });
+      one.execute([&] { ra = paint_stroke(a, s, st, reuse, &cam, &ha); });
+      four.execute([&] { rb = paint_stroke(b, s, st, reuse, &cam, &hb); });
       EXPECT_EQ(ra.dabs, rb.dabs);
       EXPECT_EQ(ra.samples_changed, rb.samples_changed);
       EXPECT_EQ(ra.rays, rb.rays);
@@ -245,14 +246,9 @@ TEST(PaintThreads, SameBytesOnOneThreadAndOnFour) {
   EXPECT_FALSE(hb.undo(b));
 }
 
-TEST(PaintThreads, RefiningAndFillingTheWholeSurfaceGiveTheSameBytes) {
+TEST_F(PaintThreads, RefiningAndFillingTheWholeSurfaceGiveTheSameBytes) {
   // Whole-surface runs (refine_surface, fill at a depth) over painted strokes: on four threads
   // against one, pool, free lists and counts.
-  const Mesh m = scene();
-  const PaintSurface s(m);
-  const PaintCamera cam = camera();
-  tbb::global_control allow(tbb::global_control::max_allowed_parallelism, 4);
-  tbb::task_arena one(1), four(4);
   OctreeTexture a = OctreeTexture::create(s), b = OctreeTexture::create(s);
   const std::vector<Stroke> all = strokes();
   auto work = [&](OctreeTexture& t, size_t& filled) {
