@@ -1630,6 +1630,9 @@ SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& optio
       for (auto* v : {&P.parent_faces, &P.parent_edges, &P.parent_vertices})
         std::vector<uint32_t>().swap(*v);
     if (level_done) level_done(k, P, view);
+    if (!keep_levels)  // level k's provenance: read by its request, stencils and patches only
+      for (auto* v : {&P.parent_faces, &P.parent_edges, &P.parent_vertices, &P.face_parent})
+        std::vector<uint32_t>().swap(*v);
     if (!any) {
       if (!keep_levels) r.levels[k] = SparseLevel{};
       break;
@@ -1672,11 +1675,8 @@ SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& optio
     if (keep_levels) r.stencils.push_back(build_stencils(options, PL, t, sel));
     selected_child_faces(PL, t, sel, C.level);
     child_vertex_sharpness(PL, sel, C.level);
-    SparseChildEdges child_edges;
-    auto cadj = std::make_unique<Adj>(sparse_child_adj(PL, t, sel, C.level, child_edges));
-    table_edge_sharpness(options, PL, t, sel, child_edges, C.level);
-
-    // Provenance, completeness and the depths left.
+    // Provenance, completeness and the depths left (before the child adjacency: level k's
+    // tags and depths can go first, the moment both levels are held).
     const size_t nvc = size_t(sel.nf) + sel.ne + sel.nv;
     C.vertex_complete.assign(nvc, 1);
     C.vertex_depth.assign(nvc, 0);
@@ -1710,6 +1710,13 @@ SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& optio
       for (uint32_t c = PL.face_offsets[f]; c < PL.face_offsets[f + 1]; ++c)
         if (near[PL.face_vertices[c]]) C.face_parent[q] = f, C.face_depth[q] = d, ++q;
     }
+    if (!keep_levels)
+      for (auto* v : {&P.vertex_complete, &P.vertex_depth, &P.face_depth, &P.face_refined})
+        std::vector<uint8_t>().swap(*v);
+    SparseChildEdges child_edges;
+    auto cadj = std::make_unique<Adj>(sparse_child_adj(PL, t, sel, C.level, child_edges));
+    table_edge_sharpness(options, PL, t, sel, child_edges, C.level);
+
     C.parent_faces = std::move(sel.faces);
     C.parent_edges = std::move(sel.edges);
     C.parent_vertices = std::move(sel.vertices);
@@ -1719,6 +1726,7 @@ SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& optio
       sel.edge_slot = {}, sel.vertex_slot = {};
       psel = std::move(sel);
       padj = std::move(adj);
+      Ids().swap(padj->corner_edge);  // level k + 1 is made: level k's stencils do not read it
       prev_requested.swap(requested);
     }
     r.levels.push_back(std::move(C));
