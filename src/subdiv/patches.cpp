@@ -1025,24 +1025,35 @@ void Builder::reserve_output(size_t k, const Level& L, const RefinedLevel& R) {
     }
     ++(reg ? regular : caps);
   }
+  // The counts are exact for this level (regular and caps are the patches emit makes); the
+  // levels still to come are a guess, so only they get room beyond this level's patches.
   const size_t levels = k == 0 ? 1 : size_t(std::max(1, o_.depth + 1 - int(k)));
-  auto room = [](auto& v, size_t more) {
-    if (v.capacity() < v.size() + more) v.reserve(v.size() + more + more / 8);
+  auto room = [](auto& v, size_t now, size_t later) {
+    if (v.capacity() < v.size() + now) v.reserve(v.size() + now + later);
   };
   PatchTable& out = out_;
-  room(out.regular_points, 16 * regular * levels);
-  room(out.regular_params, regular * levels);
-  room(out.gregory_points, 20 * caps);
-  room(out.gregory_params, caps);
-  // Rows and entries per end cap so far (a first guess before any: corner points shared by
-  // about two end caps, face points of about six entries).
+  room(out.regular_points, 16 * regular, 16 * regular * (levels - 1));
+  room(out.regular_params, regular, regular * (levels - 1));
+  room(out.gregory_points, 20 * caps, 0);
+  room(out.gregory_params, caps, 0);
+  // Rows and entries at the rate of the end caps so far; before any, the rate every shared cage
+  // shows (8.0-8.3 corner rows of about 60 entries and 8 face rows of about 40 per end cap: a
+  // corner's three points are shared by the end caps around it). The margin is smaller than the
+  // patches': a rate too low doubles an array, too high is held to the end.
   const size_t made = out.gregory_params.size();
+  auto rate = [&](size_t so_far, size_t first_guess_x4) {
+    return made ? (so_far * caps + made - 1) / made : (first_guess_x4 * caps + 3) / 4;
+  };
+  auto room_caps = [](auto& v, size_t more) {
+    if (v.capacity() < v.size() + more) v.reserve(v.size() + more + more / 16);
+  };
   for (StencilTable* g : {&out.gregory_stencils, &out.gregory_face_stencils}) {
     const bool corner = g == &out.gregory_stencils;
-    const size_t rows = made ? g->size() / made + 1 : corner ? 6 : 8;
-    const size_t entries = made ? g->indices.size() / made + 1 : corner ? 60 : 48;
-    room(g->offsets, rows * caps);
-    room(g->indices, entries * caps), room(g->weight_offsets, rows * caps);
+    const size_t rows = rate(g->size(), corner ? 33 : 32);
+    room_caps(g->offsets, rows), room_caps(g->weight_offsets, rows);
+    room_caps(g->indices, rate(g->indices.size(), corner ? 240 : 160));
+    // One shared row per corner row of the level (emit_cap empties it at the level's first).
+    if (corner && shared_.capacity() < rows) shared_.reserve(rows + rows / 16);
   }
 }
 

@@ -801,6 +801,31 @@ void for_stencil_chunks(const SubdivOptions& o, const RefinedLevel& P, const Adj
 // twice costs less than holding (and first touching) the table twice; each chunk of the second
 // pass shares weights within itself, and the chunks' pools are concatenated. With `keep`, only
 // points i with keep[i] get their stencil; the others get empty rows.
+// At least the entries of the kept rows (every point a mask can read, counted once per face or
+// edge it comes through: a face point its face's vertices, an edge point its ends and the other
+// vertices of its faces, a vertex point itself, its edge neighbours and the other vertices of
+// its faces), so the serial build's room is a close bound and never grows by doubling (the
+// build's peak heap is a level's tables and two levels' topology).
+size_t entry_bound(const RefinedLevel& P, const Adj& a, const Selection& sel, const uint8_t* keep) {
+  const LevelRef l{P, a};
+  size_t total = 64, i = 0;
+  for (uint32_t j = 0; j < sel.nf; ++j, ++i)
+    if (!keep || keep[i]) total += l.face_size(sel.face(j));
+  for (uint32_t j = 0; j < sel.ne; ++j, ++i) {
+    if (keep && !keep[i]) continue;
+    const uint32_t e = sel.edge(j);
+    total += 2;
+    for (uint32_t k = a.eco[e]; k < a.eco[e + 1]; ++k) total += l.face_size(a.face_of(a.ec[k])) - 2;
+  }
+  for (uint32_t j = 0; j < sel.nv; ++j, ++i) {
+    if (keep && !keep[i]) continue;
+    const uint32_t v = sel.vertex(j);
+    total += 1 + a.vertex_edge_count(v);
+    for (uint32_t k = a.vco[v]; k < a.vco[v + 1]; ++k) total += l.face_size(a.face_of(a.vc[k])) - 3;
+  }
+  return total;
+}
+
 StencilTable build_stencils(const SubdivOptions& o, const RefinedLevel& P, const Adj& a,
                             const Selection& sel, const uint8_t* keep = nullptr) {
   const size_t n = sel.points();
@@ -818,9 +843,7 @@ StencilTable build_stencils(const SubdivOptions& o, const RefinedLevel& P, const
     // the size grows in small steps just ahead of the writes), and no per-stencil append.
     out.offsets.resize(n + 1);
     out.weight_offsets.resize(n);
-    size_t rows = n;  // with `keep`, the rows that get a stencil
-    if (keep) rows = size_t(std::count_if(keep, keep + n, [](uint8_t x) { return x != 0; }));
-    out.indices.reserve(7 * rows + 64);
+    out.indices.reserve(entry_bound(P, a, sel, keep));
     constexpr size_t kStep = 4096;
     size_t used = 0;
     Rules rules(o, P, a, sel);
@@ -832,8 +855,12 @@ StencilTable build_stencils(const SubdivOptions& o, const RefinedLevel& P, const
         continue;
       }
       const size_t k = rules.compute(i);
-      if (used + k > out.indices.size())
-        out.indices.resize(std::max(used + k, out.indices.size() + kStep));
+      if (used + k > out.indices.size()) {
+        // In steps within the room reserved (the bound holds, so it never reallocates).
+        size_t to = std::max(used + k, out.indices.size() + kStep);
+        if (used + k <= out.indices.capacity()) to = std::min(to, out.indices.capacity());
+        out.indices.resize(to);
+      }
       out.weight_offsets[i] =
           write_row(rules, k, out.indices.data() + used, row, shared, out.weights);
       used += k;
