@@ -192,11 +192,12 @@ struct Level {
                                            // comes from (CSR, sorted)
   std::vector<int8_t> crease_edge;         // per face: local edge of a single crease, or -1
   std::vector<float> crease_sharpness;     // per face: its sharpness
-  struct Face {
-    uint32_t ptex = kNone, base = 0;
+  struct Face {  // 12 bytes (two levels of them live at once): the cage face from ptex_first_
+    uint32_t ptex = kNone;
     uint16_t u = 0, v = 0;
     uint8_t depth = 0, rot = 0, corner = 0;
   };
+  static_assert(sizeof(Face) == 12);
   std::vector<Face> param;
   // This level's faces and edges, which the next level's provenance refers to (refine_sparse
   // keeps its levels in place: they are reserved up front).
@@ -348,6 +349,12 @@ class Builder {
   std::span<const uint8_t> roles_;
   std::vector<Level> levels_;
   uint32_t ptex_count_ = 0;
+  std::vector<uint32_t> ptex_first_;  // first ptex face of each cage face, then the count
+  // The cage face whose ptex faces hold `ptex`. O(log faces).
+  uint32_t base_face(uint32_t ptex) const {
+    return uint32_t(std::upper_bound(ptex_first_.begin(), ptex_first_.end(), ptex) -
+                    ptex_first_.begin() - 1);
+  }
   PatchHierarchy* h_;
   // Filled level by level as the refinement runs (each level's patches are emitted as soon as
   // its requests are known, then its walking data is dropped).
@@ -698,11 +705,12 @@ void Builder::request(size_t k, const SparseLevel& S, const LevelAdjacency& adj,
     for (uint32_t f = 0; f < nf; ++f) {
       L.owned[f] = !R.face_hole[f];
       L.param[f].ptex = ptex;
-      L.param[f].base = f;
+      ptex_first_.push_back(ptex);
       ptex += R.face_offsets[f + 1] - R.face_offsets[f] == 4
                   ? 1
                   : R.face_offsets[f + 1] - R.face_offsets[f];
     }
+    ptex_first_.push_back(ptex);
     ptex_count_ = ptex;
   } else {
     const Level& P = levels_[k - 1];
@@ -713,7 +721,6 @@ void Builder::request(size_t k, const SparseLevel& S, const LevelAdjacency& adj,
       L.owned[f] = P.requested[pf] && !R.face_hole[f];
       const Level::Face& pp = P.param[pf];
       Level::Face& cp = L.param[f];
-      cp.base = pp.base;
       if (k == 1 && P.level->face_offsets[pf + 1] - P.level->face_offsets[pf] != 4) {
         cp.ptex = pp.ptex + child;  // a non-quad's corner quad is a ptex face of its own
         cp.corner = uint8_t(child);
@@ -1121,7 +1128,7 @@ void Builder::emit(size_t k, const SparseLevel& S) {
       PatchParam pp;
       const Level::Face& fp = L.param[f];
       pp.ptex = fp.ptex, pp.u = fp.u, pp.v = fp.v, pp.depth = fp.depth;
-      pp.level = uint8_t(k), pp.base_face = fp.base, pp.corner = fp.corner;
+      pp.level = uint8_t(k), pp.base_face = base_face(fp.ptex), pp.corner = fp.corner;
       for (int e = 0; e < 4; ++e) {
         const uint32_t tw = t.corner_twin[corner[e]];
         const bool sharp_cut = o_.inf_sharp_patches && L.corner_sharpness[corner[e]] >= kInf &&

@@ -1117,17 +1117,24 @@ Adj sparse_child_adj(const RefinedLevel& P, const Adj& pa, const Selection& sel,
   a.vc.resize(4 * size_t(Q));
   fill.assign(a.vco.begin(), a.vco.end() - 1);
   for (uint32_t c = 0; c < 4 * Q; ++c) a.vc[fill[cfv[c]]++] = c;
-  a.veo.assign(size_t(nvc) + 1, 0);
+  // Vertex -> edges waits for the level's request (sparse_vertex_edges): only a level that
+  // refines something reads it, and the last, largest level does not.
+  return a;
+}
+
+// Vertex -> edges of a sparse level, by counting over its edges (each list in edge order).
+void sparse_vertex_edges(const RefinedLevel& C, Adj& a) {
+  const size_t nv = C.vertex_count(), ne = C.edge_vertices.size() / 2;
+  a.veo.assign(nv + 1, 0);
   for (size_t e = 0; e < ne; ++e)
     ++a.veo[C.edge_vertices[2 * e] + 1], ++a.veo[C.edge_vertices[2 * e + 1] + 1];
-  for (size_t v = 0; v < nvc; ++v) a.veo[v + 1] += a.veo[v];
-  a.ve.resize(2 * size_t(ne));
-  fill.assign(a.veo.begin(), a.veo.end() - 1);
+  for (size_t v = 0; v < nv; ++v) a.veo[v + 1] += a.veo[v];
+  a.ve.resize(2 * ne);
+  std::vector<uint32_t> fill(a.veo.begin(), a.veo.end() - 1);
   for (uint32_t e = 0; e < ne; ++e) {
     a.ve[fill[C.edge_vertices[2 * size_t(e)]]++] = e;
     a.ve[fill[C.edge_vertices[2 * size_t(e) + 1]]++] = e;
   }
-  return a;
 }
 
 // The cage as level 0, with its adjacency and tags.
@@ -1615,6 +1622,7 @@ SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& optio
       for (uint32_t c = PL.face_offsets[f]; c < PL.face_offsets[f + 1]; ++c)
         near[PL.face_vertices[c]] = 1;
     }
+    if (any && k > 0) sparse_vertex_edges(PL, *adj);  // read by level k + 1's construction
     P.face_refined.assign(nf, 0);
     for (uint32_t v = 0; v < nv && any; ++v)
       if (near[v])
@@ -1637,7 +1645,6 @@ SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& optio
       if (!any) {
         // The last level: what only the next level's construction would read goes before its
         // stencils are built (the moment both levels and the new table are held).
-        Ids().swap(adj->veo), Ids().swap(adj->ve);
         std::vector<uint32_t>().swap(P.level.edge_vertices);
         for (auto* v : {&P.vertex_complete, &P.vertex_depth, &P.face_depth, &P.face_refined})
           std::vector<uint8_t>().swap(*v);
