@@ -359,8 +359,12 @@ class Builder {
   // Filled level by level as the refinement runs (each level's patches are emitted as soon as
   // its requests are known, then its walking data is dropped).
   void emit(size_t k, const SparseLevel& S);
-  void reserve_output(size_t k, const Level& L, const RefinedLevel& R);
+  void reserve_output(const Level& L, const RefinedLevel& R);
   PatchTable out_;
+  // Each level's regular patches (points, params), joined into out_ by build().
+  std::vector<std::vector<uint32_t>> level_points_;
+  std::vector<std::vector<PatchParam>> level_params_;
+  size_t regular_before_ = 0;  // regular patches of the levels before the last in level_params_
   PatchStats* stats_ = nullptr;
   double emit_ms_ = 0;
   std::vector<uint32_t> level_offsets_{0};  // first global point id of each level, as refined
@@ -1015,11 +1019,9 @@ uint32_t GregoryCap::emit_face_point(int i, bool plus, uint32_t p_row, uint32_t 
   return uint32_t(table.size() - 1);
 }
 
-// Room in the table's arrays for this level's patches and, judging by this level, the levels
-// still to come (FAS emits about as many patches per level below the first): the arrays grow
-// once or twice instead of doubling level after level, and each doubling is a copy into fresh
-// pages. Over-estimates only reserve address space; pages are touched as they are written.
-void Builder::reserve_output(size_t k, const Level& L, const RefinedLevel& R) {
+// Room in the table's arrays for this level's patches, so they grow once a level instead of
+// doubling (each doubling a copy into fresh pages, beside the old array).
+void Builder::reserve_output(const Level& L, const RefinedLevel& R) {
   size_t regular = 0, caps = 0;
   for (uint32_t f = 0; f < R.face_count(); ++f) {
     if (!L.owned[f] || (L.requested[f] && !h_) || (!L.role.empty() && L.role[f] < 2)) continue;
@@ -1032,17 +1034,20 @@ void Builder::reserve_output(size_t k, const Level& L, const RefinedLevel& R) {
     }
     ++(reg ? regular : caps);
   }
-  // The counts are exact for this level (regular and caps are the patches emit makes); the
-  // levels still to come are a guess, so only they get room beyond this level's patches.
-  const size_t levels = k == 0 ? 1 : size_t(std::max(1, o_.depth + 1 - int(k)));
-  auto room = [](auto& v, size_t now, size_t later) {
-    if (v.capacity() < v.size() + now) v.reserve(v.size() + now + later);
+  // The counts are exact for this level (regular and caps are the patches emit makes). A
+  // level's regular patches go to arrays of their own, sized exactly and joined in build(),
+  // when the levels' topology is gone: no room is held ahead of the levels to come, and no
+  // array is copied while two levels are held (room guessed a few patches short copied car L6's
+  // 1.4 MB of points at its last level, its peak).
+  auto room = [](auto& v, size_t now) {
+    if (v.capacity() < v.size() + now) v.reserve(v.size() + now);
   };
   PatchTable& out = out_;
-  room(out.regular_points, 16 * regular, 16 * regular * (levels - 1));
-  room(out.regular_params, regular, regular * (levels - 1));
-  room(out.gregory_points, 20 * caps, 0);
-  room(out.gregory_params, caps, 0);
+  regular_before_ += level_points_.empty() ? 0 : level_params_.back().size();
+  level_points_.emplace_back().reserve(16 * regular);
+  level_params_.emplace_back().reserve(regular);
+  room(out.gregory_points, 20 * caps);
+  room(out.gregory_params, caps);
   // Rows and entries at the rate of the end caps so far; before any, the rate every shared cage
   // shows (8.0-8.3 corner rows of about 60 entries and 8 face rows of about 40 per end cap: a
   // corner's three points are shared by the end caps around it). The margin is smaller than the
@@ -1110,7 +1115,7 @@ void Builder::emit(size_t k, const SparseLevel& S) {
         }
       }
     }
-    reserve_output(k, L, R);
+    reserve_output(L, R);
     for (uint32_t f = 0; f < R.face_count(); ++f) {
       if (!L.owned[f] || (L.requested[f] && !h_) || (!L.role.empty() && L.role[f] < 2)) continue;
       if (R.face_offsets[f + 1] - R.face_offsets[f] != 4 || L.force[f]) {
@@ -1142,8 +1147,9 @@ void Builder::emit(size_t k, const SparseLevel& S) {
         }
       }
       if (h_)
-        h_->node_patch[node_of[f]] = regular ? uint32_t(out.regular_params.size())
-                                             : kPatchGregory | uint32_t(out.gregory_params.size());
+        h_->node_patch[node_of[f]] = regular
+                                         ? uint32_t(regular_before_ + level_params_.back().size())
+                                         : kPatchGregory | uint32_t(out.gregory_params.size());
       bool plain4 = regular && !crease;
       for (int i = 0; i < 4 && plain4; ++i) plain4 = plain_interior(L, R, a[i]);
       if (plain4) {
@@ -1168,8 +1174,8 @@ void Builder::emit(size_t k, const SparseLevel& S) {
           put(x + d1[0] - d2[0], y + d1[1] - d2[1], fv[t.corner_next[t.corner_next[c3]]]);
         }
         pp.type = PatchType::regular;
-        out.regular_points.insert(out.regular_points.end(), grid, grid + 16);
-        out.regular_params.push_back(pp);
+        level_points_.back().insert(level_points_.back().end(), grid, grid + 16);
+        level_params_.back().push_back(pp);
         if (stats) ++stats->regular_by_level[k];
       } else if (regular) {
         RingView rings[4];
@@ -1257,8 +1263,8 @@ void Builder::emit(size_t k, const SparseLevel& S) {
             if (!phantom) throw std::logic_error("patches: a regular patch misses a point");
             grid[4 * y + x] = off + a[0];
           }
-        out.regular_points.insert(out.regular_points.end(), grid, grid + 16);
-        out.regular_params.push_back(pp);
+        level_points_.back().insert(level_points_.back().end(), grid, grid + 16);
+        level_params_.back().push_back(pp);
         if (stats) ++stats->regular_by_level[k];
       } else {
         pp.type = PatchType::gregory;
@@ -1366,11 +1372,13 @@ constexpr size_t kShrinkBytes = size_t(4) << 20;
 // Drops the refined points no patch uses, directly or through a later level's stencils (the
 // sparse refinement makes whole rings around what it refines; on dense cages a third of its
 // points only support others' stencils one level down, or nothing). Cage points stay: they are
-// the input. Renumbers in place, keeping each level's order. O(stencil entries).
-void prune_points(PatchTable& t) {
+// the input. Renumbers in place, keeping each level's order (the regular patches' points are
+// each level's array, not yet joined). O(stencil entries).
+void prune_points(PatchTable& t, std::span<std::vector<uint32_t>> regular_points) {
   const size_t nl = t.level_offsets.size() - 1;  // levels, the cage included
   std::vector<uint8_t> need(t.level_offsets.back(), 0);
-  for (const uint32_t p : t.regular_points) need[p] = 1;
+  for (const std::vector<uint32_t>& level : regular_points)
+    for (const uint32_t p : level) need[p] = 1;
   for (const uint32_t p : t.gregory_stencils.indices) need[p] = 1;
   for (const uint32_t p : t.gregory_face_stencils.indices)
     if (!(p & kCapRef)) need[p] = 1;
@@ -1421,7 +1429,8 @@ void prune_points(PatchTable& t) {
     }
     offsets[k + 1] = offsets[k] + kept;
   }
-  for (uint32_t& p : t.regular_points) p = id[p];
+  for (std::vector<uint32_t>& level : regular_points)
+    for (uint32_t& p : level) p = id[p];
   for (uint32_t& p : t.gregory_stencils.indices) p = id[p];
   for (uint32_t& p : t.gregory_face_stencils.indices)
     if (!(p & kCapRef)) p = id[p];
@@ -1430,11 +1439,25 @@ void prune_points(PatchTable& t) {
 
 void Builder::build(PatchTable& out, SparseRefinement& r, PatchStats* stats) {
   const auto t0 = std::chrono::steady_clock::now();
+  // The walking state goes first: the table is finished with only itself held.
+  levels_ = {}, shared_ = {}, shared_head_ = {}, cap_ = GregoryCap{};
   out = std::move(out_);
   out.options = o_.subdiv;
   out.level_offsets = std::move(level_offsets_);
   out.level_stencils = std::move(r.stencils);
-  prune_points(out);
+  prune_points(out, level_points_);
+  // The levels' regular patches joined, each level's arrays freed as they are copied.
+  size_t n = 0;
+  for (const std::vector<PatchParam>& p : level_params_) n += p.size();
+  out.regular_points.reserve(16 * n), out.regular_params.reserve(n);
+  for (size_t k = 0; k < level_params_.size(); ++k) {
+    out.regular_points.insert(out.regular_points.end(), level_points_[k].begin(),
+                              level_points_[k].end());
+    out.regular_params.insert(out.regular_params.end(), level_params_[k].begin(),
+                              level_params_[k].end());
+    std::vector<uint32_t>().swap(level_points_[k]);
+    std::vector<PatchParam>().swap(level_params_[k]);
+  }
   out.ptex_count = ptex_count_;
   out.ptex_of_face = ptex_offsets(cage_);
   resolve_cap_points(out);

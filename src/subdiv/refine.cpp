@@ -1622,7 +1622,6 @@ SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& optio
       for (uint32_t c = PL.face_offsets[f]; c < PL.face_offsets[f + 1]; ++c)
         near[PL.face_vertices[c]] = 1;
     }
-    if (any && k > 0) sparse_vertex_edges(PL, *adj);  // read by level k + 1's construction
     P.face_refined.assign(nf, 0);
     for (uint32_t v = 0; v < nv && any; ++v)
       if (near[v])
@@ -1673,6 +1672,8 @@ SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& optio
     }
     if (k == kMaxSparseDepth)
       throw InputError(fmt::format("sparse refinement: requests beyond level {}", kMaxSparseDepth));
+    // Read by level k + 1's construction (and stencils), made once level k - 1 is gone.
+    if (k > 0) sparse_vertex_edges(PL, *adj);
 
     Selection sel;
     sel.all = false;
