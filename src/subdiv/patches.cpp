@@ -136,12 +136,19 @@ struct CornerSharpness {
   float operator[](uint32_t c) const { return edge_sharpness[corner_edge[c]]; }
 };
 
+// Corner twins: refine_sparse's for a last level (it drops its edge lists first), else made here.
+struct CornerTwins {
+  std::vector<uint32_t> own;
+  std::span<const uint32_t> given;
+  uint32_t operator[](uint32_t c) const { return given.empty() ? own[c] : given[c]; }
+};
+
 struct Topo {
   bool quads = true;  // every face is a quad (a corner count of 4 per face is not enough)
   CornerRel<0> corner_face;
   CornerRel<1> corner_next;
   CornerRel<2> corner_prev;
-  std::vector<uint32_t> corner_twin;
+  CornerTwins corner_twin;
   std::span<const uint32_t> vertex_offsets, vertex_corners;  // refine_sparse's, during a request
 };
 
@@ -161,15 +168,21 @@ Topo make_topo(const RefinedLevel& R, const LevelAdjacency& a) {
       }
     }
   }
-  t.corner_twin.assign(nc, kNone);
-  const size_t ne = a.edge_corner_offsets.size() - 1;
-  for (size_t e = 0; e < ne; ++e) {
-    const uint32_t lo = a.edge_corner_offsets[e], hi = a.edge_corner_offsets[e + 1];
-    if (hi - lo == 2) {
-      t.corner_twin[a.edge_corners[lo]] = a.edge_corners[lo + 1];
-      t.corner_twin[a.edge_corners[lo + 1]] = a.edge_corners[lo];
-    } else if (hi - lo > 2) {
-      for (uint32_t i = lo; i < hi; ++i) t.corner_twin[a.edge_corners[i]] = kNonManifold;
+  if (!a.corner_twin.empty()) {
+    if (a.corner_twin.size() != nc) throw std::logic_error("patches: corner twins off the level");
+    t.corner_twin.given = a.corner_twin;
+  } else {
+    std::vector<uint32_t>& twin = t.corner_twin.own;
+    twin.assign(nc, kNone);
+    const size_t ne = a.edge_corner_offsets.size() - 1;
+    for (size_t e = 0; e < ne; ++e) {
+      const uint32_t lo = a.edge_corner_offsets[e], hi = a.edge_corner_offsets[e + 1];
+      if (hi - lo == 2) {
+        twin[a.edge_corners[lo]] = a.edge_corners[lo + 1];
+        twin[a.edge_corners[lo + 1]] = a.edge_corners[lo];
+      } else if (hi - lo > 2) {
+        for (uint32_t i = lo; i < hi; ++i) twin[a.edge_corners[i]] = kNonManifold;
+      }
     }
   }
   t.vertex_offsets = a.vertex_corner_offsets;

@@ -1122,6 +1122,21 @@ Adj sparse_child_adj(const RefinedLevel& P, const Adj& pa, const Selection& sel,
   return a;
 }
 
+// Per corner the other corner on its edge (kNone: boundary, kNonManifold: more than two faces).
+Ids corner_twins(const Adj& a, size_t corners) {
+  Ids twin(corners, kNone);
+  const size_t ne = a.eco.size() - 1;
+  for (size_t e = 0; e < ne; ++e) {
+    const uint32_t lo = a.eco[e], hi = a.eco[e + 1];
+    if (hi - lo == 2) {
+      twin[a.ec[lo]] = a.ec[lo + 1], twin[a.ec[lo + 1]] = a.ec[lo];
+    } else if (hi - lo > 2) {
+      for (uint32_t i = lo; i < hi; ++i) twin[a.ec[i]] = kNonManifold;
+    }
+  }
+  return twin;
+}
+
 // Vertex -> edges of a sparse level, by counting over its edges (each list in edge order).
 void sparse_vertex_edges(const RefinedLevel& C, Adj& a) {
   const size_t nv = C.vertex_count(), ne = C.edge_vertices.size() / 2;
@@ -1614,7 +1629,7 @@ SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& optio
     std::vector<uint8_t> near(nv, 0);
     bool any = false;
     requested.assign(nf, 0);
-    const LevelAdjacency view{t.corner_edge, t.eco, t.ec, t.vco, t.vc};
+    const LevelAdjacency view{t.corner_edge, t.eco, t.ec, t.vco, t.vc, {}};
     request(k, P, view, requested);
     for (uint32_t f = 0; f < nf; ++f) {
       if (!requested[f]) continue;
@@ -1662,7 +1677,17 @@ SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& optio
     if (!any && !keep_levels)  // the last level's provenance, read by its stencils only
       for (auto* v : {&P.parent_faces, &P.parent_edges, &P.parent_vertices})
         std::vector<uint32_t>().swap(*v);
-    if (level_done) level_done(k, P, view);
+    if (level_done && !any && !keep_levels) {
+      // The last level: its patches read corner twins, not edge -> corner lists, and nothing
+      // reads it after them, so the lists (25 bytes a quad) go before the table grows.
+      const Ids twin = corner_twins(*adj, PL.face_vertices.size());
+      Ids().swap(adj->eco), Ids().swap(adj->ec);
+      LevelAdjacency last = view;
+      last.edge_corner_offsets = {}, last.edge_corners = {}, last.corner_twin = twin;
+      level_done(k, P, last);
+    } else if (level_done) {
+      level_done(k, P, view);
+    }
     if (!keep_levels)  // level k's provenance: read by its request, stencils and patches only
       for (auto* v : {&P.parent_faces, &P.parent_edges, &P.parent_vertices, &P.face_parent})
         std::vector<uint32_t>().swap(*v);

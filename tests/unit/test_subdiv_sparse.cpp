@@ -303,7 +303,8 @@ TEST(Sparse, NothingRequestedIsTheCage) {
 TEST(Sparse, LevelDoneFollowsEachRequestWithTheSameLevel) {
   // A lean run (levels dropped as it goes) refining everything twice: level_done(k) comes after
   // request(k) and before request(k + 1), once per level, the last one included, with the
-  // level request(k) saw and that level's own adjacency.
+  // level request(k) saw and that level's own adjacency; the last level's comes with corner
+  // twins instead of edge -> corner lists, equal to the mesh layer's own corner table.
   const Mesh cage = make_shape("cage");
   std::vector<std::string> events;
   std::vector<size_t> faces_seen;
@@ -321,7 +322,24 @@ TEST(Sparse, LevelDoneFollowsEachRequestWithTheSameLevel) {
         EXPECT_EQ(S.level.face_count(), faces_seen[k]);
         EXPECT_EQ(a.vertex_corner_offsets.size(), S.level.vertex_count() + 1);
         EXPECT_EQ(a.corner_edge.size(), S.level.face_vertices.size());
-        EXPECT_EQ(a.edge_corner_offsets.size(), S.level.edge_count() + 1);
+        if (k < 2) {
+          EXPECT_EQ(a.edge_corner_offsets.size(), S.level.edge_count() + 1);
+          EXPECT_TRUE(a.corner_twin.empty());
+          return;
+        }
+        EXPECT_TRUE(a.edge_corner_offsets.empty() && a.edge_corners.empty());
+        ASSERT_EQ(a.corner_twin.size(), S.level.face_vertices.size());
+        Mesh m;
+        m.face_offsets = S.level.face_offsets, m.face_vertices = S.level.face_vertices;
+        m.positions.assign(3 * S.level.vertex_count(), 0.0f);
+        const Topology t = build_topology(m);
+        ASSERT_EQ(t.corner_twin.size(), a.corner_twin.size());
+        size_t inner = 0;
+        for (size_t c = 0; c < a.corner_twin.size(); ++c) {
+          EXPECT_EQ(a.corner_twin[c], t.corner_twin[c]) << c;
+          inner += a.corner_twin[c] < kNonManifold;
+        }
+        EXPECT_GT(inner, a.corner_twin.size() / 2);  // a closed cage: almost every edge has two
       });
   const std::vector<std::string> want = {"request 0", "done 0",    "request 1",
                                          "done 1",    "request 2", "done 2"};

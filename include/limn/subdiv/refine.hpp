@@ -171,6 +171,10 @@ struct LevelAdjacency {
   std::span<const uint32_t> corner_edge;  ///< per corner: the edge of its outgoing half-edge
   std::span<const uint32_t> edge_corner_offsets, edge_corners;      ///< edge -> corners on it
   std::span<const uint32_t> vertex_corner_offsets, vertex_corners;  ///< vertex -> its corners
+  /// Per corner: the other corner on its edge, kNone on a boundary, kNonManifold on an edge of
+  /// more than two faces. Given to `level_done` for a lean run's last level, whose edge -> corner
+  /// lists are then dropped (empty) first; empty otherwise.
+  std::span<const uint32_t> corner_twin;
 };
 
 /// Decides which faces of a sparse level to refine: called once per level (0 = the cage) with
