@@ -190,6 +190,13 @@ Topo make_topo(const RefinedLevel& R, const LevelAdjacency& a) {
   return t;
 }
 
+// Gives a vector's memory back (`v = {}` would pick the initializer-list assignment, which
+// empties it and keeps its capacity).
+template <class V>
+void release(V& v) {
+  V().swap(v);
+}
+
 // Per-level state of the isolation.
 struct Level {
   Topo topo;
@@ -787,7 +794,8 @@ void Builder::request(size_t k, const SparseLevel& S, const LevelAdjacency& adj,
   // Level k - 1 has given level k what it needs (depths, placement, sources).
   if (k > 0) {
     Level& P = levels_[k - 1];
-    P.rem = {}, P.requested = {}, P.param = {}, P.src = {}, P.src_offsets = {}, P.role = {};
+    release(P.rem), release(P.requested), release(P.param), release(P.src), release(P.src_offsets);
+    release(P.role);
   }
 }
 
@@ -849,10 +857,10 @@ void Builder::level_done(size_t k, const SparseLevel& S, const LevelAdjacency& a
   // What the next level needs stays (depths, requests, placement, sources); the rest goes.
   Level& L = levels_[k];
   L.topo = {};
-  L.ring_slot = {}, L.ring_edge = {}, L.ring_diag = {}, L.ring_face = {};
-  L.vinfo = {};
-  L.corner_sharpness = {}, L.irregular = {}, L.owned = {}, L.crease_edge = {};
-  L.crease_sharpness = {}, L.force = {};
+  release(L.ring_slot), release(L.ring_edge), release(L.ring_diag), release(L.ring_face);
+  release(L.vinfo), release(L.irregular), release(L.owned), release(L.crease_edge);
+  release(L.crease_sharpness), release(L.force);
+  L.corner_sharpness = {};
 }
 
 void GregoryCap::finish_topology(uint32_t first, uint32_t count) {
@@ -1453,7 +1461,7 @@ void prune_points(PatchTable& t, std::span<std::vector<uint32_t>> regular_points
 void Builder::build(PatchTable& out, SparseRefinement& r, PatchStats* stats) {
   const auto t0 = std::chrono::steady_clock::now();
   // The walking state goes first: the table is finished with only itself held.
-  levels_ = {}, shared_ = {}, shared_head_ = {}, cap_ = GregoryCap{};
+  release(levels_), release(shared_), release(shared_head_), cap_ = GregoryCap{};
   out = std::move(out_);
   out.options = o_.subdiv;
   out.level_offsets = std::move(level_offsets_);

@@ -1782,8 +1782,9 @@ SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& optio
     C.parent_vertices = std::move(sel.vertices);
     if (!keep_levels) {
       sel.near = nullptr;  // `near` is this level's
-      sel.faces = {}, sel.edges = {}, sel.vertices = {};
-      sel.edge_slot = {}, sel.vertex_slot = {};
+      // Swapped out, not `= {}` (the initializer-list assignment keeps the capacity).
+      for (auto* v : {&sel.faces, &sel.edges, &sel.vertices, &sel.edge_slot, &sel.vertex_slot})
+        std::vector<uint32_t>().swap(*v);
       psel = std::move(sel);
       padj = std::move(adj);
       Ids().swap(padj->corner_edge);  // level k + 1 is made: level k's stencils do not read it
