@@ -21,6 +21,7 @@
 #include <unordered_map>
 #include <utility>
 
+#include "corner_twins.hpp"
 #include "limn/mesh/topology.hpp"
 #include "shared_weights.hpp"
 
@@ -172,18 +173,8 @@ Topo make_topo(const RefinedLevel& R, const LevelAdjacency& a) {
     if (a.corner_twin.size() != nc) throw std::logic_error("patches: corner twins off the level");
     t.corner_twin.given = a.corner_twin;
   } else {
-    std::vector<uint32_t>& twin = t.corner_twin.own;
-    twin.assign(nc, kNone);
-    const size_t ne = a.edge_corner_offsets.size() - 1;
-    for (size_t e = 0; e < ne; ++e) {
-      const uint32_t lo = a.edge_corner_offsets[e], hi = a.edge_corner_offsets[e + 1];
-      if (hi - lo == 2) {
-        twin[a.edge_corners[lo]] = a.edge_corners[lo + 1];
-        twin[a.edge_corners[lo + 1]] = a.edge_corners[lo];
-      } else if (hi - lo > 2) {
-        for (uint32_t i = lo; i < hi; ++i) twin[a.edge_corners[i]] = kNonManifold;
-      }
-    }
+    t.corner_twin.own.resize(nc);
+    detail::corner_twins(a.edge_corner_offsets, a.edge_corners, t.corner_twin.own);
   }
   t.vertex_offsets = a.vertex_corner_offsets;
   t.vertex_corners = a.vertex_corners;

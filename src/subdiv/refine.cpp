@@ -18,6 +18,7 @@
 // point to edge point) then two per parent edge (edge point to each end's vertex point). Sparse
 // levels get theirs in closed form too (sparse_child_adj), with one corner per selected face.
 #include "limn/subdiv/refine.hpp"
+#include "corner_twins.hpp"
 #include "shared_weights.hpp"
 
 #include <fmt/format.h>
@@ -1122,21 +1123,6 @@ Adj sparse_child_adj(const RefinedLevel& P, const Adj& pa, const Selection& sel,
   return a;
 }
 
-// Per corner the other corner on its edge (kNone: boundary, kNonManifold: more than two faces).
-Ids corner_twins(const Adj& a, size_t corners) {
-  Ids twin(corners, kNone);
-  const size_t ne = a.eco.size() - 1;
-  for (size_t e = 0; e < ne; ++e) {
-    const uint32_t lo = a.eco[e], hi = a.eco[e + 1];
-    if (hi - lo == 2) {
-      twin[a.ec[lo]] = a.ec[lo + 1], twin[a.ec[lo + 1]] = a.ec[lo];
-    } else if (hi - lo > 2) {
-      for (uint32_t i = lo; i < hi; ++i) twin[a.ec[i]] = kNonManifold;
-    }
-  }
-  return twin;
-}
-
 // Vertex -> edges of a sparse level, by counting over its edges (each list in edge order).
 void sparse_vertex_edges(const RefinedLevel& C, Adj& a) {
   const size_t nv = C.vertex_count(), ne = C.edge_vertices.size() / 2;
@@ -1680,7 +1666,8 @@ SparseRefinement refine_sparse_impl(const Mesh& cage, const SubdivOptions& optio
     if (level_done && !any && !keep_levels) {
       // The last level: its patches read corner twins, not edge -> corner lists, and nothing
       // reads it after them, so the lists (25 bytes a quad) go before the table grows.
-      const Ids twin = corner_twins(*adj, PL.face_vertices.size());
+      Ids twin(PL.face_vertices.size());
+      detail::corner_twins(adj->eco, adj->ec, twin);
       Ids().swap(adj->eco), Ids().swap(adj->ec);
       LevelAdjacency last = view;
       last.edge_corner_offsets = {}, last.edge_corners = {}, last.corner_twin = twin;
