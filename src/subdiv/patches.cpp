@@ -1382,10 +1382,11 @@ void resolve_cap_points(PatchTable& t) {
 constexpr size_t kShrinkBytes = size_t(4) << 20;
 
 // Drops the refined points no patch uses, directly or through a later level's stencils (the
-// sparse refinement makes whole rings around what it refines; on dense cages a third of its
-// points only support others' stencils one level down, or nothing). Cage points stay: they are
-// the input. Renumbers in place, keeping each level's order (the regular patches' points are
-// each level's array, not yet joined). O(stencil entries).
+// sparse refinement makes whole rings around what it refines; its lean runs already leave out
+// the rows nothing can read, so every shared cage's whole-cage build needs all that is left, and
+// then nothing is renumbered). Cage points stay: they are the input. Renumbers in place, keeping
+// each level's order (the regular patches' points are each level's array, not yet joined).
+// O(stencil entries).
 void prune_points(PatchTable& t, std::span<std::vector<uint32_t>> regular_points) {
   const size_t nl = t.level_offsets.size() - 1;  // levels, the cage included
   std::vector<uint8_t> need(t.level_offsets.back(), 0);
@@ -1401,6 +1402,9 @@ void prune_points(PatchTable& t, std::span<std::vector<uint32_t>> regular_points
       if (need[base + i])
         for (uint32_t j = s.offsets[i]; j < s.offsets[i + 1]; ++j) need[prev + s.indices[j]] = 1;
   }
+  // Every point needed: the ids stay as they are.
+  if (std::all_of(need.begin() + t.level_offsets[1], need.end(), [](uint8_t x) { return x != 0; }))
+    return;
   // New global ids; the cage keeps its own.
   std::vector<uint32_t> id(t.level_offsets.back(), kNone);
   std::vector<uint32_t> offsets(nl + 1, 0);
