@@ -165,7 +165,7 @@ struct SparseRefinement {
 SparseRefinement refine_sparse(const Mesh& cage, std::span<const uint8_t> vertex_depth,
                                std::span<const uint8_t> face_depth, const SubdivOptions& options);
 
-/// A sparse level's adjacency as refine_sparse has it (valid during the request call only).
+/// A sparse level's adjacency as refine_sparse has it (valid during the call it is passed to).
 /// Corners are indices into the level's face_vertices; edges are the level's edge list.
 struct LevelAdjacency {
   std::span<const uint32_t> corner_edge;  ///< per corner: the edge of its outgoing half-edge
