@@ -359,8 +359,7 @@ class Builder {
   std::span<const uint8_t> depth_;
   std::span<const uint8_t> roles_;
   std::vector<Level> levels_;
-  uint32_t ptex_count_ = 0;
-  std::vector<uint32_t> ptex_first_;  // first ptex face of each cage face, then the count
+  std::vector<uint32_t> ptex_first_;  // ptex_offsets(cage_): becomes the table's ptex_of_face
   // The cage face whose ptex faces hold `ptex`. O(log faces).
   uint32_t base_face(uint32_t ptex) const {
     return uint32_t(std::upper_bound(ptex_first_.begin(), ptex_first_.end(), ptex) -
@@ -375,7 +374,6 @@ class Builder {
   // Each level's regular patches (points, params), joined into out_ by build().
   std::vector<std::vector<uint32_t>> level_points_;
   std::vector<std::vector<PatchParam>> level_params_;
-  size_t regular_before_ = 0;  // regular patches of the levels before the last in level_params_
   PatchStats* stats_ = nullptr;
   double emit_ms_ = 0;
   std::vector<uint32_t> level_offsets_{0};  // first global point id of each level, as refined
@@ -716,17 +714,11 @@ void Builder::request(size_t k, const SparseLevel& S, const LevelAdjacency& adj,
   L.owned.assign(nf, 0);
   L.param.resize(nf);
   if (k == 0) {
-    uint32_t ptex = 0;
+    ptex_first_ = ptex_offsets(cage_);  // level 0 is the cage
     for (uint32_t f = 0; f < nf; ++f) {
       L.owned[f] = !R.face_hole[f];
-      L.param[f].ptex = ptex;
-      ptex_first_.push_back(ptex);
-      ptex += R.face_offsets[f + 1] - R.face_offsets[f] == 4
-                  ? 1
-                  : R.face_offsets[f + 1] - R.face_offsets[f];
+      L.param[f].ptex = ptex_first_[f];
     }
-    ptex_first_.push_back(ptex);
-    ptex_count_ = ptex;
   } else {
     const Level& P = levels_[k - 1];
     uint32_t child = 0;
@@ -1055,7 +1047,6 @@ void Builder::reserve_output(const Level& L, const RefinedLevel& R) {
     if (v.capacity() < v.size() + now) v.reserve(v.size() + now);
   };
   PatchTable& out = out_;
-  regular_before_ += level_points_.empty() ? 0 : level_params_.back().size();
   level_points_.emplace_back().reserve(16 * regular);
   level_params_.emplace_back().reserve(regular);
   room(out.gregory_points, 20 * caps);
@@ -1128,6 +1119,8 @@ void Builder::emit(size_t k, const SparseLevel& S) {
       }
     }
     reserve_output(L, R);
+    size_t regular_before = 0;  // the hierarchy's regular index of this level's first patch
+    for (size_t i = 0; i + 1 < level_params_.size(); ++i) regular_before += level_params_[i].size();
     for (uint32_t f = 0; f < R.face_count(); ++f) {
       if (!L.owned[f] || (L.requested[f] && !h_) || (!L.role.empty() && L.role[f] < 2)) continue;
       if (R.face_offsets[f + 1] - R.face_offsets[f] != 4 || L.force[f]) {
@@ -1160,7 +1153,7 @@ void Builder::emit(size_t k, const SparseLevel& S) {
       }
       if (h_)
         h_->node_patch[node_of[f]] = regular
-                                         ? uint32_t(regular_before_ + level_params_.back().size())
+                                         ? uint32_t(regular_before + level_params_.back().size())
                                          : kPatchGregory | uint32_t(out.gregory_params.size());
       bool plain4 = regular && !crease;
       for (int i = 0; i < 4 && plain4; ++i) plain4 = plain_interior(L, R, a[i]);
@@ -1471,11 +1464,10 @@ void Builder::build(PatchTable& out, SparseRefinement& r, PatchStats* stats) {
                               level_points_[k].end());
     out.regular_params.insert(out.regular_params.end(), level_params_[k].begin(),
                               level_params_[k].end());
-    std::vector<uint32_t>().swap(level_points_[k]);
-    std::vector<PatchParam>().swap(level_params_[k]);
+    release(level_points_[k]), release(level_params_[k]);
   }
-  out.ptex_count = ptex_count_;
-  out.ptex_of_face = ptex_offsets(cage_);
+  out.ptex_count = ptex_first_.back();
+  out.ptex_of_face = std::move(ptex_first_);
   resolve_cap_points(out);
   if (stats) {
     stats->regular_by_level.resize(out.level_offsets.size() - 1, 0);

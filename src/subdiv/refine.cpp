@@ -797,11 +797,6 @@ void for_stencil_chunks(const SubdivOptions& o, const RefinedLevel& P, const Adj
   tbb::parallel_for(size_t(0), chunks, run);
 }
 
-// All the child points' stencils as one table, rows sharing their weights (see StencilTable).
-// Large levels take two parallel passes (sizes, then entries in place): computing each stencil
-// twice costs less than holding (and first touching) the table twice; each chunk of the second
-// pass shares weights within itself, and the chunks' pools are concatenated. With `keep`, only
-// points i with keep[i] get their stencil; the others get empty rows.
 // At least the entries of the kept rows (every point a mask can read, counted once per face or
 // edge it comes through: a face point its face's vertices, an edge point its ends and the other
 // vertices of its faces, a vertex point itself, its edge neighbours and the other vertices of
@@ -827,6 +822,11 @@ size_t entry_bound(const RefinedLevel& P, const Adj& a, const Selection& sel, co
   return total;
 }
 
+// All the child points' stencils as one table, rows sharing their weights (see StencilTable).
+// Large levels take two parallel passes (sizes, then entries in place): computing each stencil
+// twice costs less than holding (and first touching) the table twice; each chunk of the second
+// pass shares weights within itself, and the chunks' pools are concatenated. With `keep`, only
+// points i with keep[i] get their stencil; the others get empty rows.
 StencilTable build_stencils(const SubdivOptions& o, const RefinedLevel& P, const Adj& a,
                             const Selection& sel, const uint8_t* keep = nullptr) {
   const size_t n = sel.points();
