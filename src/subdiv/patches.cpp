@@ -188,6 +188,29 @@ void release(V& v) {
   V().swap(v);
 }
 
+// An append-only array in blocks of 2^kShift elements: growing never copies what it holds (a
+// vector's doubling holds both copies at once, and the pending end caps are held through the
+// build's peak, the last level's emission).
+template <class T, int kShift>
+class BlockArray {
+ public:
+  size_t size() const { return size_; }
+  void push_back(const T& x) {
+    if (size_ >> kShift == blocks_.size())
+      blocks_.push_back(std::make_unique_for_overwrite<T[]>(size_t(1) << kShift));
+    blocks_[size_ >> kShift][size_ & kMask] = x;
+    ++size_;
+  }
+  T& back() { return blocks_[(size_ - 1) >> kShift][(size_ - 1) & kMask]; }
+  const T& operator[](size_t i) const { return blocks_[i >> kShift][i & kMask]; }
+  void release() { *this = BlockArray(); }
+
+ private:
+  static constexpr size_t kMask = (size_t(1) << kShift) - 1;
+  std::vector<std::unique_ptr<T[]>> blocks_;
+  size_t size_ = 0;
+};
+
 // Per-level state of the isolation.
 struct Level {
   Topo topo;
@@ -383,8 +406,34 @@ class Builder {
   // table's pool: a row most often equals the last row of its kind.
   detail::SharedWeights corner_weights_[3], face_weights_[2];
   // cap_'s rows into out_: its corner points shared with the level's earlier end caps at the
-  // same corner fans; ids gets the 20 points (face points marked kCapRef).
-  void emit_cap(size_t k, const RefinedLevel& R, const uint32_t a[4], uint32_t ids[20]);
+  // same corner fans (`count`: the level's points); ids gets the 20 points (face points marked
+  // kCapRef).
+  void emit_cap(size_t k, uint32_t count, const uint32_t a[4], uint32_t ids[20]);
+  // End caps wait for the levels to be gone: a cap's rows read only its corners' fans, which
+  // emit() keeps (a few ids a corner), so the end-cap tables (a third of a small cage's table)
+  // and their sharing state never grow beside a level's topology and walking state.
+  struct PendingCorner {
+    uint32_t a = 0;  // level point
+    uint32_t fan = 0, fan_at = 0, face_in_ring = 0;
+    // Its ring: pending_rings_ from ring_at, turned by ring_rot faces (a fan of many faces keeps
+    // one ring for all the end caps around it, which would otherwise hold its valence squared).
+    uint32_t ring_at = 0, ring_rot = 0;
+    uint32_t faces : 30 = 0, boundary : 1 = 0, sharp : 1 = 0;
+  };
+  struct PendingLevel {
+    uint32_t level = 0, first_point = 0, points = 0;  // its global offset and point count
+    size_t caps_end = 0;                              // pending_corners_ / 4 after its caps
+  };
+  BlockArray<PendingCorner, 10> pending_corners_;  // 4 per end cap, in emission order
+  BlockArray<uint32_t, 12> pending_rings_;         // the corners' rings (GregoryCap::Corner::ring)
+  std::vector<PendingLevel> pending_levels_;
+  static constexpr uint32_t kLongFan = 16;  // faces from which a fan's ring is kept once
+  // Long fans' kept rings by (global point, fan): where the ring is and its fan_at.
+  std::unordered_map<uint64_t, std::pair<uint32_t, uint32_t>> long_fans_;
+  // Emits the pending end caps' rows and points, level by level, in the order they were met.
+  void emit_pending_caps();
+  // Room in the end-cap arrays for `caps` more end caps.
+  void reserve_caps(size_t caps);
   // The corner points made so far at this level: per vertex a list of (fan, ring edge or kNone
   // for P, row of gregory_stencils).
   struct SharedRow {
@@ -1049,13 +1098,20 @@ void Builder::reserve_output(const Level& L, const RefinedLevel& R) {
   PatchTable& out = out_;
   level_points_.emplace_back().reserve(16 * regular);
   level_params_.emplace_back().reserve(regular);
-  room(out.gregory_points, 20 * caps);
   room(out.gregory_params, caps);
+}
+
+void Builder::reserve_caps(size_t caps) {
+  auto room = [](auto& v, size_t now) {
+    if (v.capacity() < v.size() + now) v.reserve(v.size() + now);
+  };
+  PatchTable& out = out_;
+  room(out.gregory_points, 20 * caps);
   // Rows and entries at the rate of the end caps so far; before any, the rate every shared cage
   // shows (8.0-8.3 corner rows of about 60 entries and 8 face rows of about 40 per end cap: a
   // corner's three points are shared by the end caps around it). The margin is smaller than the
   // patches': a rate too low doubles an array, too high is held to the end.
-  const size_t made = out.gregory_params.size();
+  const size_t made = out.gregory_points.size() / 20;
   auto rate = [&](size_t so_far, size_t first_guess_x4) {
     return made ? (so_far * caps + made - 1) / made : (first_guess_x4 * caps + 3) / 4;
   };
@@ -1273,44 +1329,93 @@ void Builder::emit(size_t k, const SparseLevel& S) {
         if (stats) ++stats->regular_by_level[k];
       } else {
         pp.type = PatchType::gregory;
-        GregoryCap& cap = cap_;
-        cap.reset();
+        // Its corners' fans, for emit_pending_caps.
         for (int i = 0; i < 4; ++i) {
-          GregoryCap::Corner& cc = cap.c[i];
+          pending_corners_.push_back({});
+          PendingCorner& cc = pending_corners_.back();
           const Ring& g = spans_[i];
-          span(L, R, corner[i], cc.sharp, spans_[i]);
+          bool sharp = false;
+          span(L, R, corner[i], sharp, spans_[i]);
           if (!g.all_quads) throw std::logic_error("patches: an end cap next to a non-quad");
-          cc.v = off + a[i];
+          const uint32_t nf = uint32_t(g.face.size());
+          cc.a = a[i];
           const auto least = std::min_element(g.face.begin(), g.face.end());
-          cc.fan = *least, cc.fan_at = int(least - g.face.begin());
-          cc.faces = int(g.face.size());
-          cc.face_in_ring = int(std::find(g.face.begin(), g.face.end(), f) - g.face.begin());
-          cc.boundary = g.boundary;
-          // Written in place (ring keeps its room from cap to cap; reset() clears it).
-          const size_t nr = 2 * g.face.size() + (g.boundary ? 1 : 0);
-          cc.ring.resize(nr);
-          for (size_t m = 0; m < g.face.size(); ++m)
-            cc.ring[2 * m] = off + g.edge_end[m], cc.ring[2 * m + 1] = off + g.diagonal[m];
-          if (g.boundary) cc.ring[nr - 1] = off + g.edge_end.back();
+          cc.fan = *least, cc.fan_at = uint32_t(least - g.face.begin());
+          cc.faces = nf & 0x3fffffffu;  // a level's faces are fewer than 2^30 (corners are 32-bit)
+          cc.boundary = g.boundary, cc.sharp = sharp;
+          cc.face_in_ring = uint32_t(std::find(g.face.begin(), g.face.end(), f) - g.face.begin());
+          // The same fan met again: its ring is the kept one turned to start where this one
+          // does (a boundary fan's always starts at its boundary).
+          auto it = nf >= kLongFan ? long_fans_.find(uint64_t(off + a[i]) << 32 | cc.fan)
+                                   : long_fans_.end();
+          if (it != long_fans_.end() && (!g.boundary || it->second.second == cc.fan_at)) {
+            cc.ring_at = it->second.first;
+            cc.ring_rot = (it->second.second + nf - cc.fan_at) % nf;
+            continue;
+          }
+          if (pending_rings_.size() > UINT32_MAX - 2 * size_t(nf) - 1)
+            throw InputError("patches: end-cap rings of more than 2^32 points");
+          cc.ring_at = uint32_t(pending_rings_.size());
+          if (nf >= kLongFan)
+            long_fans_[uint64_t(off + a[i]) << 32 | cc.fan] = {cc.ring_at, cc.fan_at};
+          for (size_t m = 0; m < nf; ++m) {
+            pending_rings_.push_back(off + g.edge_end[m]);
+            pending_rings_.push_back(off + g.diagonal[m]);
+          }
+          if (g.boundary) pending_rings_.push_back(off + g.edge_end.back());
         }
-        cap.finish_topology(off, uint32_t(R.vertex_count()));
-        uint32_t ids[20];
-        emit_cap(k, R, a, ids);
-        out.gregory_points.insert(out.gregory_points.end(), ids, ids + 20);
         out.gregory_params.push_back(pp);
         if (stats) ++stats->gregory_by_level[k];
       }
     }
   }
+  if (pending_corners_.size() / 4 > (pending_levels_.empty() ? 0 : pending_levels_.back().caps_end))
+    pending_levels_.push_back({uint32_t(k), level_offsets_.back(), uint32_t(S.level.vertex_count()),
+                               pending_corners_.size() / 4});
   level_offsets_.push_back(level_offsets_.back() + uint32_t(S.level.vertex_count()));
   emit_ms_ += ms_since(t0);
 }
 
-void Builder::emit_cap(size_t k, const RefinedLevel& R, const uint32_t a[4], uint32_t ids[20]) {
+void Builder::emit_pending_caps() {
+  GregoryCap& cap = cap_;
+  size_t first = 0;
+  for (const PendingLevel& pl : pending_levels_) {
+    reserve_caps(pl.caps_end - first);
+    for (size_t e = first; e < pl.caps_end; ++e) {
+      cap.reset();
+      uint32_t a[4];
+      for (int i = 0; i < 4; ++i) {
+        const PendingCorner& pc = pending_corners_[4 * e + size_t(i)];
+        GregoryCap::Corner& cc = cap.c[i];
+        a[i] = pc.a;
+        cc.v = pl.first_point + pc.a;
+        cc.fan = pc.fan, cc.fan_at = int(pc.fan_at), cc.faces = int(pc.faces);
+        cc.face_in_ring = int(pc.face_in_ring), cc.boundary = pc.boundary, cc.sharp = pc.sharp;
+        const uint32_t nf = pc.faces;
+        cc.ring.resize(2 * size_t(nf) + pc.boundary);
+        for (uint32_t m = 0, from = pc.ring_rot; m < nf;
+             ++m, from = from + 1 == nf ? 0 : from + 1) {
+          cc.ring[2 * m] = pending_rings_[pc.ring_at + 2 * size_t(from)];
+          cc.ring[2 * m + 1] = pending_rings_[pc.ring_at + 2 * size_t(from) + 1];
+        }
+        if (pc.boundary) cc.ring[2 * nf] = pending_rings_[pc.ring_at + 2 * size_t(nf)];
+      }
+      cap.finish_topology(pl.first_point, pl.points);
+      uint32_t ids[20];
+      emit_cap(pl.level, pl.points, a, ids);
+      out_.gregory_points.insert(out_.gregory_points.end(), ids, ids + 20);
+    }
+    first = pl.caps_end;
+  }
+  pending_corners_.release(), pending_rings_.release(), release(pending_levels_);
+  std::unordered_map<uint64_t, std::pair<uint32_t, uint32_t>>().swap(long_fans_);
+}
+
+void Builder::emit_cap(size_t k, uint32_t count, const uint32_t a[4], uint32_t ids[20]) {
   GregoryCap& cap = cap_;
   StencilTable& corners = out_.gregory_stencils;
   if (shared_level_ != k) {
-    shared_head_.assign(R.vertex_count(), kNone);
+    shared_head_.assign(count, kNone);
     shared_.clear();
     shared_level_ = k;
   }
@@ -1449,7 +1554,9 @@ void prune_points(PatchTable& t, std::span<std::vector<uint32_t>> regular_points
 void Builder::build(PatchTable& out, SparseRefinement& r, PatchStats* stats) {
   const auto t0 = std::chrono::steady_clock::now();
   // The walking state goes first: the table is finished with only itself held.
-  release(levels_), release(shared_), release(shared_head_), cap_ = GregoryCap{};
+  release(levels_);
+  emit_pending_caps();
+  release(shared_), release(shared_head_), cap_ = GregoryCap{};
   out = std::move(out_);
   out.options = o_.subdiv;
   out.level_offsets = std::move(level_offsets_);

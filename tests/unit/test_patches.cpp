@@ -7,6 +7,7 @@
 #include <cstring>
 #include <filesystem>
 #include <map>
+#include <numbers>
 #include <string>
 #include <tuple>
 
@@ -330,6 +331,45 @@ TEST(Patches, EndCapsShareCornerPoints) {
   EXPECT_EQ(pts, into);
   std::vector<float> short_buffer(pts.size() - 3);
   EXPECT_THROW(t.points(cube.positions, short_buffer), InputError);
+}
+
+// A fan of n quads around a centre vertex, bumped out of the plane: closed round the centre
+// (an interior vertex of valence n) or open over 3/4 of a turn (a boundary vertex of n faces).
+Mesh fan_cage(int n, bool closed) {
+  Mesh m;
+  const double turn = closed ? 2 * std::numbers::pi : 1.5 * std::numbers::pi;
+  const int spokes = closed ? n : n + 1;
+  m.positions = {0.0f, 0.0f, 0.3f};
+  for (int i = 0; i < spokes; ++i) {  // spoke i at 1 + 2i, the rim point after it at 2 + 2i
+    const double a = turn * i / n, b = turn * (i + 0.5) / n;
+    m.positions.insert(m.positions.end(),
+                       {float(std::cos(a)), float(std::sin(a)), float(0.1 * std::sin(3 * a))});
+    m.positions.insert(m.positions.end(), {float(1.7 * std::cos(b)), float(1.7 * std::sin(b)),
+                                           float(-0.2 + 0.15 * std::cos(5 * b))});
+  }
+  for (int i = 0; i < n; ++i) {
+    const uint32_t s = uint32_t(1 + 2 * i), next = uint32_t(1 + 2 * ((i + 1) % spokes));
+    m.face_vertices.insert(m.face_vertices.end(), {0u, s, s + 1, next});
+    m.face_offsets.push_back(uint32_t(m.face_vertices.size()));
+  }
+  return m;
+}
+
+// Fans of many faces (their end caps keep one ring for the fan, turned to each cap's start)
+// match OpenSubdiv, interior and boundary, with and without infinitely sharp patches.
+TEST(Patches, HighValenceFansMatchOpenSubdiv) {
+  for (const bool closed : {true, false})
+    for (const int n : {17, 40}) {
+      const Mesh cage = fan_cage(n, closed);
+      for (const bool inf : {false, true})
+        for (int depth : {1, 2, 3}) {
+          const Comparison c = compare_with_osd(cage, depth, subdiv_options(cage), inf);
+          EXPECT_GT(c.samples, 0u);
+          EXPECT_LT(c.max_position, 1e-5) << (closed ? "interior" : "boundary") << " fan of " << n
+                                          << " depth " << depth << " worst " << c.worst;
+          EXPECT_LT(c.max_normal, 1e-3) << n << " depth " << depth;
+        }
+    }
 }
 
 // End-cap derivatives are exact: central differences of positions agree.
