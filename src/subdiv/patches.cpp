@@ -1763,14 +1763,11 @@ class RegionBuilder {
               fmt::format("crease tag {} names vertices {} and {}, which share no edge", i, a, b));
       }
     }
-    vertex_sharpness_.assign(nv, 0.0f);
-    for (size_t i = 0; i < cage.corner_vertices.size(); ++i)
-      vertex_sharpness_[cage.corner_vertices[i]] = std::min(cage.corner_sharpness[i], kInf);
-    hole_.assign(nf, 0);
-    for (const uint32_t f : cage.hole_faces) hole_[f] = 1;
-    face_local_.assign(nf, kNone);
+    for (size_t i = 0; i < cage.corner_vertices.size(); ++i)  // a later tag wins
+      corner_sharpness_[cage.corner_vertices[i]] = std::min(cage.corner_sharpness[i], kInf);
+    face_state_.assign(nf, 0);
+    for (const uint32_t f : cage.hole_faces) face_state_[f] |= kHole;
     vertex_local_.assign(nv, kNone);
-    done_.assign(nf, 0);
     out_.options = o.subdiv;
     out_.ptex_of_face = ptex_offsets(cage);
     out_.ptex_count = out_.ptex_of_face.back();
@@ -1789,7 +1786,7 @@ class RegionBuilder {
         tbb::make_filter<void, std::shared_ptr<Region>>(
             tbb::filter_mode::serial_in_order,
             [&](tbb::flow_control& fc) -> std::shared_ptr<Region> {
-              while (seed < nf && done_[seed]) ++seed;
+              while (seed < nf && (face_state_[seed] & kDone)) ++seed;
               if (seed == nf) {
                 fc.stop();
                 return nullptr;
@@ -1810,7 +1807,7 @@ class RegionBuilder {
                 tbb::filter_mode::serial_in_order, [&](const std::shared_ptr<Region>& r) {
                   emitted += r->region_faces;
                   merge(*r, stats);
-                  if (r->index == 0) reserve(double(nf) / double(std::max<size_t>(emitted, 1)));
+                  if (emitted < nf) reserve(emitted, nf, r->region_faces);
                 }));
     finish(stats);
     return std::move(out_);
@@ -1821,7 +1818,7 @@ class RegionBuilder {
   void grow(uint32_t seed, uint32_t batch, Region& r) {
     std::vector<uint32_t>& faces = r.faces;
     auto add = [&](uint32_t f, uint8_t role) {
-      face_local_[f] = uint32_t(faces.size());
+      face_state_[f] |= kCut;
       faces.push_back(f);
       r.roles.push_back(role);
     };
@@ -1834,12 +1831,12 @@ class RegionBuilder {
       }
     };
     add(seed, 2);
-    done_[seed] = 1;
+    face_state_[seed] |= kDone;
     for (size_t head = 0; head < faces.size() && faces.size() < batch; ++head)
       around(faces[head], [&](uint32_t g) {
-        if (faces.size() < batch && face_local_[g] == kNone && !done_[g]) {
+        if (faces.size() < batch && !(face_state_[g] & (kCut | kDone))) {
           add(g, 2);
-          done_[g] = 1;
+          face_state_[g] |= kDone;
         }
       });
     r.region_faces = faces.size();
@@ -1849,7 +1846,7 @@ class RegionBuilder {
       const uint8_t role = ring < kTrustedRings ? 1 : 0;
       for (size_t i = begin; i < end; ++i)
         around(faces[i], [&](uint32_t g) {
-          if (face_local_[g] == kNone) add(g, role);
+          if (!(face_state_[g] & kCut)) add(g, role);
         });
       begin = end;
     }
@@ -1862,7 +1859,8 @@ class RegionBuilder {
     const std::vector<uint32_t>& faces = r.faces;
     std::vector<uint32_t>& verts = r.vertices;
     const uint32_t* fv = cage_.face_vertices.data();
-    for (const uint32_t f : faces) {
+    for (size_t i = 0; i < faces.size(); ++i) {
+      const uint32_t f = faces[i];
       for (uint32_t c = cage_.face_offsets[f]; c < cage_.face_offsets[f + 1]; ++c) {
         const uint32_t v = fv[c];
         if (vertex_local_[v] == kNone) {
@@ -1872,7 +1870,7 @@ class RegionBuilder {
         m.face_vertices.push_back(vertex_local_[v]);
       }
       m.face_offsets.push_back(uint32_t(m.face_vertices.size()));
-      if (hole_[f]) m.hole_faces.push_back(face_local_[f]);
+      if (face_state_[f] & kHole) m.hole_faces.push_back(uint32_t(i));
     }
     if (!creases_.empty())
       for (const uint32_t f : faces) {  // every vertex has its id now
@@ -1889,14 +1887,16 @@ class RegionBuilder {
     m.positions.resize(3 * verts.size());
     for (size_t i = 0; i < verts.size(); ++i) {
       std::copy_n(&cage_.positions[3 * size_t(verts[i])], 3, &m.positions[3 * i]);
-      if (vertex_sharpness_[verts[i]] > 0.0f) {
+      if (corner_sharpness_.empty()) continue;
+      const auto it = corner_sharpness_.find(verts[i]);
+      if (it != corner_sharpness_.end() && it->second > 0.0f) {
         m.corner_vertices.push_back(uint32_t(i));
-        m.corner_sharpness.push_back(vertex_sharpness_[verts[i]]);
+        m.corner_sharpness.push_back(it->second);
       }
     }
     if (!depth_.empty())
       for (const uint32_t v : verts) r.depth.push_back(depth_[v]);
-    for (const uint32_t f : faces) face_local_[f] = kNone;
+    for (const uint32_t f : faces) face_state_[f] &= uint8_t(~kCut);
     for (const uint32_t v : verts) vertex_local_[v] = kNone;
   }
 
@@ -2013,10 +2013,24 @@ class RegionBuilder {
     }
   }
 
-  // After the first region: room for the rest at its rate, so the big arrays grow once.
-  void reserve(double scale) {
-    const double s = scale * 1.1;
-    auto grow = [&](auto& v) { v.reserve(size_t(double(v.size()) * s)); };
+  // Room for the whole table at the rate of the regions merged so far, once a tenth of the cage
+  // is in (the first region alone misjudges features that are few and far between: a rate off
+  // by more than the margin doubled an array late, a copy beside the old one at the build's
+  // peak); until then the arrays double while they are small. Afterwards an array is given room
+  // again only when the next regions might not fit, as late as possible, when the rate is known
+  // best. The room is held to the end: it is part of the build's peak.
+  void reserve(size_t emitted, size_t faces, size_t last_region) {
+    if (10 * emitted < faces) return;
+    const double scale = double(faces) / double(emitted);
+    const bool first = !reserved_;
+    reserved_ = true;
+    auto grow = [&](auto& v) {
+      const double want = double(v.size()) * scale;
+      const double next = 2.0 * double(v.size()) * double(last_region) / double(emitted);
+      if (first ? double(v.capacity()) < 1.05 * want
+                : double(v.capacity()) < double(v.size()) + next)
+        v.reserve(size_t(1.05 * want + next) + 64);
+    };
     for (StencilTable& st : out_.level_stencils)
       grow(st.offsets), grow(st.indices), grow(st.weight_offsets);
     for (StencilTable* g : {&out_.gregory_stencils, &out_.gregory_face_stencils})
@@ -2068,11 +2082,15 @@ class RegionBuilder {
   std::span<const uint8_t> depth_;
   std::vector<uint32_t> vertex_face_offsets_, vertex_faces_;
   std::unordered_map<uint64_t, Crease> creases_;
-  std::vector<float> vertex_sharpness_;
-  std::vector<uint8_t> hole_, done_;
-  std::vector<uint32_t> face_local_, vertex_local_;  // kNone outside the region being cut
-  std::vector<uint32_t> count_{0};                   // points per level so far
-  std::vector<uint8_t> corner_level_, face_level_;   // level of each merged end-cap row
+  std::unordered_map<uint32_t, float> corner_sharpness_;  // tagged cage vertices
+  // Per cage face: kDone once a region has taken it as its own, kCut while in the region being
+  // cut, kHole for a hole.
+  static constexpr uint8_t kDone = 1, kCut = 2, kHole = 4;
+  std::vector<uint8_t> face_state_;
+  std::vector<uint32_t> vertex_local_;              // kNone outside the region being cut
+  std::vector<uint32_t> count_{0};                  // points per level so far
+  bool reserved_ = false;                           // room made for the whole table
+  std::vector<uint8_t> corner_level_, face_level_;  // level of each merged end-cap row
   PatchTable out_;
 };
 
