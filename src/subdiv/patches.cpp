@@ -203,6 +203,18 @@ class BlockArray {
   }
   T& back() { return blocks_[(size_ - 1) >> kShift][(size_ - 1) & kMask]; }
   const T& operator[](size_t i) const { return blocks_[i >> kShift][i & kMask]; }
+  // Room for n more elements in the last block, or null (then push them one by one).
+  T* extend(size_t n) {
+    if (!n || size_ >> kShift == blocks_.size() || (size_ & kMask) + n > kMask + 1) return nullptr;
+    T* p = &blocks_[size_ >> kShift][size_ & kMask];
+    size_ += n;
+    return p;
+  }
+  // Elements [at, at + n) as one span when they lie in one block, else null.
+  const T* contiguous(size_t at, size_t n) const {
+    return n && (at >> kShift) == ((at + n - 1) >> kShift) ? &blocks_[at >> kShift][at & kMask]
+                                                           : nullptr;
+  }
   void release() { *this = BlockArray(); }
 
  private:
@@ -884,6 +896,8 @@ void Builder::classify(size_t k, const SparseLevel& S, const LevelAdjacency& adj
 }
 
 void Builder::level_done(size_t k, const SparseLevel& S, const LevelAdjacency& adj) {
+  // Level k - 1 is gone (refine_sparse drops it before this call): its end caps can be made.
+  emit_pending_caps();
   if (levels_[k].deferred) classify(k, S, adj, nullptr);
   emit(k, S);
   // What the next level needs stays (depths, requests, placement, sources); the rest goes.
@@ -1358,6 +1372,13 @@ void Builder::emit(size_t k, const SparseLevel& S) {
           cc.ring_at = uint32_t(pending_rings_.size());
           if (nf >= kLongFan)
             long_fans_[uint64_t(off + a[i]) << 32 | cc.fan] = {cc.ring_at, cc.fan_at};
+          const size_t nr = 2 * size_t(nf) + g.boundary;
+          if (uint32_t* r = pending_rings_.extend(nr)) {
+            for (size_t m = 0; m < nf; ++m)
+              r[2 * m] = off + g.edge_end[m], r[2 * m + 1] = off + g.diagonal[m];
+            if (g.boundary) r[nr - 1] = off + g.edge_end.back();
+            continue;
+          }
           for (size_t m = 0; m < nf; ++m) {
             pending_rings_.push_back(off + g.edge_end[m]);
             pending_rings_.push_back(off + g.diagonal[m]);
@@ -1392,7 +1413,12 @@ void Builder::emit_pending_caps() {
         cc.fan = pc.fan, cc.fan_at = int(pc.fan_at), cc.faces = int(pc.faces);
         cc.face_in_ring = int(pc.face_in_ring), cc.boundary = pc.boundary, cc.sharp = pc.sharp;
         const uint32_t nf = pc.faces;
-        cc.ring.resize(2 * size_t(nf) + pc.boundary);
+        const size_t nr = 2 * size_t(nf) + pc.boundary;
+        cc.ring.resize(nr);
+        if (const uint32_t* r = pending_rings_.contiguous(pc.ring_at, nr); r && !pc.ring_rot) {
+          std::copy_n(r, nr, cc.ring.data());
+          continue;
+        }
         for (uint32_t m = 0, from = pc.ring_rot; m < nf;
              ++m, from = from + 1 == nf ? 0 : from + 1) {
           cc.ring[2 * m] = pending_rings_[pc.ring_at + 2 * size_t(from)];
