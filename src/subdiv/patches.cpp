@@ -421,9 +421,10 @@ class Builder {
   // same corner fans (`count`: the level's points); ids gets the 20 points (face points marked
   // kCapRef).
   void emit_cap(size_t k, uint32_t count, const uint32_t a[4], uint32_t ids[20]);
-  // End caps wait for the levels to be gone: a cap's rows read only its corners' fans, which
-  // emit() keeps (a few ids a corner), so the end-cap tables (a third of a small cage's table)
-  // and their sharing state never grow beside a level's topology and walking state.
+  // End caps wait for their level to be gone (the next level's level_done, or build() for the
+  // last): a cap's rows read only its corners' fans, which emit() keeps (a few ids a corner), so
+  // the end-cap tables (a third of a small cage's table) and their sharing state never grow
+  // beside their level's topology and walking state (the last level's is the build's peak).
   struct PendingCorner {
     uint32_t a = 0;  // level point
     uint32_t fan = 0, fan_at = 0, face_in_ring = 0;
@@ -442,7 +443,7 @@ class Builder {
   static constexpr uint32_t kLongFan = 16;  // faces from which a fan's ring is kept once
   // Long fans' kept rings by (global point, fan): where the ring is and its fan_at.
   std::unordered_map<uint64_t, std::pair<uint32_t, uint32_t>> long_fans_;
-  // Emits the pending end caps' rows and points, level by level, in the order they were met.
+  // Emits the pending end caps' rows and points in the order they were met, and drops their fans.
   void emit_pending_caps();
   // Room in the end-cap arrays for `caps` more end caps.
   void reserve_caps(size_t caps);
