@@ -195,25 +195,20 @@ template <class T, int kShift>
 class BlockArray {
  public:
   size_t size() const { return size_; }
+  const T& operator[](size_t i) const { return blocks_[i >> kShift][i & kMask]; }
   void push_back(const T& x) {
     if (size_ >> kShift == blocks_.size())
-      blocks_.push_back(std::make_unique_for_overwrite<T[]>(size_t(1) << kShift));
+      blocks_.push_back(std::make_unique_for_overwrite<T[]>(kMask + 1));
     blocks_[size_ >> kShift][size_ & kMask] = x;
     ++size_;
   }
-  T& back() { return blocks_[(size_ - 1) >> kShift][(size_ - 1) & kMask]; }
-  const T& operator[](size_t i) const { return blocks_[i >> kShift][i & kMask]; }
-  // Room for n more elements in the last block, or null (then push them one by one).
-  T* extend(size_t n) {
-    if (!n || size_ >> kShift == blocks_.size() || (size_ & kMask) + n > kMask + 1) return nullptr;
-    T* p = &blocks_[size_ >> kShift][size_ & kMask];
-    size_ += n;
-    return p;
-  }
-  // Elements [at, at + n) as one span when they lie in one block, else null.
-  const T* contiguous(size_t at, size_t n) const {
-    return n && (at >> kShift) == ((at + n - 1) >> kShift) ? &blocks_[at >> kShift][at & kMask]
-                                                           : nullptr;
+  // Elements [at, at + n) into out.
+  void copy(size_t at, size_t n, T* out) const {
+    while (n) {
+      const size_t k = std::min(n, kMask + 1 - (at & kMask));
+      out = std::copy_n(&blocks_[at >> kShift][at & kMask], k, out);
+      at += k, n -= k;
+    }
   }
   void release() { *this = BlockArray(); }
 
@@ -1089,6 +1084,12 @@ uint32_t GregoryCap::emit_face_point(int i, bool plus, uint32_t p_row, uint32_t 
 
 // Room in the table's arrays for this level's patches, so they grow once a level instead of
 // doubling (each doubling a copy into fresh pages, beside the old array).
+// Room in v for `more` elements beyond its size (exactly: no doubling).
+template <class V>
+void reserve_more(V& v, size_t more) {
+  if (v.capacity() < v.size() + more) v.reserve(v.size() + more);
+}
+
 void Builder::reserve_output(const Level& L, const RefinedLevel& R) {
   size_t regular = 0, caps = 0;
   for (uint32_t f = 0; f < R.face_count(); ++f) {
@@ -1107,21 +1108,14 @@ void Builder::reserve_output(const Level& L, const RefinedLevel& R) {
   // when the levels' topology is gone: no room is held ahead of the levels to come, and no
   // array is copied while two levels are held (room guessed a few patches short copied car L6's
   // 1.4 MB of points at its last level, its peak).
-  auto room = [](auto& v, size_t now) {
-    if (v.capacity() < v.size() + now) v.reserve(v.size() + now);
-  };
-  PatchTable& out = out_;
   level_points_.emplace_back().reserve(16 * regular);
   level_params_.emplace_back().reserve(regular);
-  room(out.gregory_params, caps);
+  reserve_more(out_.gregory_params, caps);
 }
 
 void Builder::reserve_caps(size_t caps) {
-  auto room = [](auto& v, size_t now) {
-    if (v.capacity() < v.size() + now) v.reserve(v.size() + now);
-  };
   PatchTable& out = out_;
-  room(out.gregory_points, 20 * caps);
+  reserve_more(out.gregory_points, 20 * caps);
   // Rows and entries at the rate of the end caps so far; before any, the rate every shared cage
   // shows (8.0-8.3 corner rows of about 60 entries and 8 face rows of about 40 per end cap: a
   // corner's three points are shared by the end caps around it). The margin is smaller than the
@@ -1346,8 +1340,7 @@ void Builder::emit(size_t k, const SparseLevel& S) {
         pp.type = PatchType::gregory;
         // Its corners' fans, for emit_pending_caps.
         for (int i = 0; i < 4; ++i) {
-          pending_corners_.push_back({});
-          PendingCorner& cc = pending_corners_.back();
+          PendingCorner cc;
           const Ring& g = spans_[i];
           bool sharp = false;
           span(L, R, corner[i], sharp, spans_[i]);
@@ -1361,30 +1354,23 @@ void Builder::emit(size_t k, const SparseLevel& S) {
           cc.face_in_ring = uint32_t(std::find(g.face.begin(), g.face.end(), f) - g.face.begin());
           // The same fan met again: its ring is the kept one turned to start where this one
           // does (a boundary fan's always starts at its boundary).
-          auto it = nf >= kLongFan ? long_fans_.find(uint64_t(off + a[i]) << 32 | cc.fan)
-                                   : long_fans_.end();
+          const uint64_t key = uint64_t(off + a[i]) << 32 | cc.fan;
+          const auto it = nf >= kLongFan ? long_fans_.find(key) : long_fans_.end();
           if (it != long_fans_.end() && (!g.boundary || it->second.second == cc.fan_at)) {
             cc.ring_at = it->second.first;
             cc.ring_rot = (it->second.second + nf - cc.fan_at) % nf;
-            continue;
+          } else {
+            if (pending_rings_.size() > UINT32_MAX - 2 * size_t(nf) - 1)
+              throw InputError("patches: end-cap rings of more than 2^32 points");
+            cc.ring_at = uint32_t(pending_rings_.size());
+            if (nf >= kLongFan) long_fans_[key] = {cc.ring_at, cc.fan_at};
+            for (size_t m = 0; m < nf; ++m) {
+              pending_rings_.push_back(off + g.edge_end[m]);
+              pending_rings_.push_back(off + g.diagonal[m]);
+            }
+            if (g.boundary) pending_rings_.push_back(off + g.edge_end.back());
           }
-          if (pending_rings_.size() > UINT32_MAX - 2 * size_t(nf) - 1)
-            throw InputError("patches: end-cap rings of more than 2^32 points");
-          cc.ring_at = uint32_t(pending_rings_.size());
-          if (nf >= kLongFan)
-            long_fans_[uint64_t(off + a[i]) << 32 | cc.fan] = {cc.ring_at, cc.fan_at};
-          const size_t nr = 2 * size_t(nf) + g.boundary;
-          if (uint32_t* r = pending_rings_.extend(nr)) {
-            for (size_t m = 0; m < nf; ++m)
-              r[2 * m] = off + g.edge_end[m], r[2 * m + 1] = off + g.diagonal[m];
-            if (g.boundary) r[nr - 1] = off + g.edge_end.back();
-            continue;
-          }
-          for (size_t m = 0; m < nf; ++m) {
-            pending_rings_.push_back(off + g.edge_end[m]);
-            pending_rings_.push_back(off + g.diagonal[m]);
-          }
-          if (g.boundary) pending_rings_.push_back(off + g.edge_end.back());
+          pending_corners_.push_back(cc);
         }
         out.gregory_params.push_back(pp);
         if (stats) ++stats->gregory_by_level[k];
@@ -1413,19 +1399,12 @@ void Builder::emit_pending_caps() {
         cc.v = pl.first_point + pc.a;
         cc.fan = pc.fan, cc.fan_at = int(pc.fan_at), cc.faces = int(pc.faces);
         cc.face_in_ring = int(pc.face_in_ring), cc.boundary = pc.boundary, cc.sharp = pc.sharp;
-        const uint32_t nf = pc.faces;
-        const size_t nr = 2 * size_t(nf) + pc.boundary;
-        cc.ring.resize(nr);
-        if (const uint32_t* r = pending_rings_.contiguous(pc.ring_at, nr); r && !pc.ring_rot) {
-          std::copy_n(r, nr, cc.ring.data());
-          continue;
-        }
-        for (uint32_t m = 0, from = pc.ring_rot; m < nf;
-             ++m, from = from + 1 == nf ? 0 : from + 1) {
-          cc.ring[2 * m] = pending_rings_[pc.ring_at + 2 * size_t(from)];
-          cc.ring[2 * m + 1] = pending_rings_[pc.ring_at + 2 * size_t(from) + 1];
-        }
-        if (pc.boundary) cc.ring[2 * nf] = pending_rings_[pc.ring_at + 2 * size_t(nf)];
+        // The kept ring turned by ring_rot faces (a boundary ring's last point is never turned:
+        // boundary rings are shared only unturned).
+        cc.ring.resize(2 * size_t(pc.faces) + pc.boundary);
+        pending_rings_.copy(pc.ring_at, cc.ring.size(), cc.ring.data());
+        std::rotate(cc.ring.begin(), cc.ring.begin() + 2 * long(pc.ring_rot),
+                    cc.ring.begin() + 2 * long(pc.faces));
       }
       cap.finish_topology(pl.first_point, pl.points);
       uint32_t ids[20];
