@@ -156,23 +156,51 @@ void Refiner::full_tris(const CellBox& b, std::span<const uint32_t> region_tris,
   s_.triangles_in_box(c, b.h, slack_, out);
 }
 
+namespace {
+
+// A new leaf's colour on a side from its parent's: the parent's sample of the side its tag gives
+// triangle t, or the background.
+Rgba8 inherit(const PaintSurface& s, const LeafCell* parent, Rgba8 background, uint32_t t) {
+  if (!parent) return background;
+  if (s.side(parent->tag, t) == 0) return parent->s[0];
+  return parent->dbl ? parent->s[1] : background;
+}
+
+}  // namespace
+
 LeafCell Refiner::make_leaf(std::span<const uint32_t> tris, const LeafCell* parent) const {
-  auto inherit = [&](uint32_t t) -> Rgba8 {
-    if (!parent) return ed_.background();
-    const int side = s_.side(parent->tag, t);
-    if (side == 0) return parent->s[0];
-    return parent->dbl ? parent->s[1] : ed_.background();
-  };
   LeafCell cell;
   cell.tag = uint8_t(s_.tag(tris[0]));
-  cell.s[0] = inherit(tris[0]);
+  cell.s[0] = inherit(s_, parent, ed_.background(), tris[0]);
   for (uint32_t t : tris)
     if (s_.side(cell.tag, t) == 1) {
       cell.dbl = true;
-      cell.s[1] = inherit(t);
+      cell.s[1] = inherit(s_, parent, ed_.background(), t);
       break;
     }
   return cell;
+}
+
+bool Refiner::leaf_from_candidates(std::span<const uint32_t> candidates, const CellBox& cb,
+                                   const LeafCell* parent, LeafCell& out) const {
+  auto meets_cell = [&](uint32_t t) {
+    return tri_meets_box(cb.c, cb.h, v3(s_.corner(t, 0)), v3(s_.corner(t, 1)), v3(s_.corner(t, 2)),
+                         slack_);
+  };
+  // make_leaf reads the list's first triangle and its first on side 1 of that one's tag: the
+  // lowest indices meeting the cell.
+  uint32_t first = ~0u;
+  for (uint32_t t : candidates)
+    if (t < first && meets_cell(t)) first = t;
+  if (first == ~0u) return false;
+  out = LeafCell{};
+  out.tag = uint8_t(s_.tag(first));
+  out.s[0] = inherit(s_, parent, ed_.background(), first);
+  uint32_t back = ~0u;
+  for (uint32_t t : candidates)
+    if (t < back && s_.side(out.tag, t) == 1 && meets_cell(t)) back = t;
+  if (back != ~0u) out.dbl = true, out.s[1] = inherit(s_, parent, ed_.background(), back);
+  return true;
 }
 
 std::span<const uint32_t> Refiner::block(const Ctx& w, uint32_t ptr, uint32_t& at) const {
@@ -283,13 +311,23 @@ GeneralNode Refiner::refine_leaf(Ctx& w, const CellBox& cb, const LeafCell& leaf
   Split& parts = w.scratch[size_t(cb.level)].full_parts;
   CellBox kids[8];
   children(cb, kids);
+  bool off_region[8] = {};
+  LeafCell off_leaf[8];
   if (!full_list) {
     // Each child's list from the BVH (at once on the threads with a log): the lists splitting
     // the cell's own would give, without querying it first.
+    // A child off the region (visit_general will not visit it) needs only its leaf.
     auto query = [&](int c) {
       const float kc[3] = {kids[c].c.x, kids[c].c.y, kids[c].c.z};
-      parts[size_t(c)].clear();
-      s_.triangles_in_box(kc, kids[c].h, slack_, parts[size_t(c)]);
+      std::vector<uint32_t>& out = parts[size_t(c)];
+      out.clear();
+      if (meets(kids[c])) {
+        s_.triangles_in_box(kc, kids[c].h, slack_, out);
+        return;
+      }
+      s_.box_candidates(kc, kids[c].h, slack_, out);
+      off_region[c] = leaf_from_candidates(out, kids[c], &leaf, off_leaf[c]);
+      out.clear();
     };
     if (w.log)
       tbb::parallel_for(0, 8, query);
@@ -315,9 +353,9 @@ GeneralNode Refiner::refine_leaf(Ctx& w, const CellBox& cb, const LeafCell& leaf
   }
   for (int c = 0; c < 8; ++c) {
     const std::vector<uint32_t>& fc = parts[size_t(c)];
-    if (fc.empty()) continue;
+    if (fc.empty() && !off_region[c]) continue;
     g.kind[c] = CellKind::leaf;
-    g.leaf[c] = make_leaf(fc, &leaf);
+    g.leaf[c] = off_region[c] ? off_leaf[c] : make_leaf(fc, &leaf);
     ++w.stats.leaves_created;
   }
   ++w.stats.generals_created;

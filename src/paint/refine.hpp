@@ -150,6 +150,12 @@ class Refiner {
   /// A new leaf for a cell whose triangles are `tris` (non-empty), with colours inherited from
   /// `parent` (null: background).
   LeafCell make_leaf(std::span<const uint32_t> tris, const LeafCell* parent) const;
+  /// The leaf make_leaf gives the cell `cb` (its list: the triangles of `candidates` meeting it,
+  /// sorted), found from candidates in any order, repeats allowed, with box tests only on
+  /// those that could change it (a lower index than the one kept): false when none meets the
+  /// cell. For a cell only its leaf is wanted of (no list to split further).
+  bool leaf_from_candidates(std::span<const uint32_t> candidates, const CellBox& cb,
+                            const LeafCell* parent, LeafCell& out) const;
 
   /// Keeps, across runs (the dabs of a stroke), the triangle lists of the leaves of each brick
   /// run() visits (not those it builds), and uses them instead of splitting the brick's lists

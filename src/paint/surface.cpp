@@ -181,12 +181,24 @@ bool gather_callback(RTCPointQueryFunctionArguments* args) {
   return false;
 }
 
+// The ball the box queries ask the BVH for: around the grown box.
+float box_query_radius(float h, float slack) {
+  return (h + slack) * 1.7320508f * 1.0001f;
+}
+
 struct BoxQuery {
   const PaintSurface* s;
   std::vector<uint32_t>* out;
   paint_detail::V3 c;
   float h, slack;
 };
+
+bool candidate_callback(RTCPointQueryFunctionArguments* args) {
+  const BoxQuery& q = *static_cast<const BoxQuery*>(args->userPtr);
+  const float* n = q.s->normal(args->primID);
+  if (n[0] != 0 || n[1] != 0 || n[2] != 0) q.out->push_back(args->primID);
+  return false;
+}
 
 bool box_callback(RTCPointQueryFunctionArguments* args) {
   const BoxQuery& q = *static_cast<const BoxQuery*>(args->userPtr);
@@ -319,12 +331,24 @@ void PaintSurface::triangles_in_box(const float c[3], float h, float slack,
   RTCPointQuery pq;
   pq.x = c[0], pq.y = c[1], pq.z = c[2];
   pq.time = 0;
-  pq.radius = (h + slack) * 1.7320508f * 1.0001f;  // the ball around the grown box
+  pq.radius = box_query_radius(h, slack);
   RTCPointQueryContext ctx;
   rtcInitPointQueryContext(&ctx);
   rtcPointQuery(embree_->scene, &pq, &ctx, &box_callback, &q);
   std::sort(out.begin() + std::ptrdiff_t(first), out.end());
   out.erase(std::unique(out.begin() + std::ptrdiff_t(first), out.end()), out.end());
+}
+
+void PaintSurface::box_candidates(const float c[3], float h, float slack,
+                                  std::vector<uint32_t>& out) const {
+  BoxQuery q{this, &out, {c[0], c[1], c[2]}, h, slack};
+  RTCPointQuery pq;
+  pq.x = c[0], pq.y = c[1], pq.z = c[2];
+  pq.time = 0;
+  pq.radius = box_query_radius(h, slack);
+  RTCPointQueryContext ctx;
+  rtcInitPointQueryContext(&ctx);
+  rtcPointQuery(embree_->scene, &pq, &ctx, &candidate_callback, &q);
 }
 
 }  // namespace limn

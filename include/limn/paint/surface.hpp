@@ -80,6 +80,9 @@ class PaintSurface {
   /// sqrt 3) that the paint layer's box test (separating axes, touching counts) keeps, decided
   /// as the BVH reports them instead of gathered first. O(log T + answer).
   void triangles_in_box(const float c[3], float h, float slack, std::vector<uint32_t>& out) const;
+  /// Appends the triangles triangles_in_box(c, h, slack) tests, untested: a superset of its
+  /// answer, in the BVH's order, a triangle possibly twice. O(log T + answer).
+  void box_candidates(const float c[3], float h, float slack, std::vector<uint32_t>& out) const;
 
  private:
   std::vector<float> corners_, normals_;
