@@ -104,6 +104,8 @@ class Refiner {
   /// kMaxDepth.
   void run(const Region& region, std::span<const uint32_t> tris, int depth, LeafPainter* painter);
 
+  /// How far every box test grows a cell's box (model units): see the constructor.
+  float slack() const { return slack_; }
   /// The box of a cell.
   CellBox box(int level, uint32_t x, uint32_t y, uint32_t z) const {
     CellBox b;

@@ -1,6 +1,8 @@
 // The paint layer's fast box tests against its scalar triangle-box test: the 8-box test gives the
 // scalar test's answer for every box (bit for bit, so refinement and painting keep the same
-// cells), and the quick containment test never claims an overlap the scalar test denies.
+// cells), and the quick containment test never claims an overlap the scalar test denies; the
+// BVH's box queries against testing every triangle, and a cell's leaf found from the BVH's
+// candidates against the leaf of its exact list.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -11,9 +13,11 @@
 
 #include "../../src/paint/geometry.hpp"
 #include "../../src/paint/octree_blocks.hpp"
+#include "../../src/paint/refine.hpp"
 #include "limn/mesh/shapes.hpp"
 #include "limn/paint/surface.hpp"
 #include "limn/paint/texture.hpp"
+#include "paint_oracle.hpp"
 
 namespace limn {
 namespace {
@@ -143,6 +147,72 @@ TEST(PaintGeometry, BoxQueryEqualsTestingEveryTriangle) {
     found += got.size();
   }
   EXPECT_GT(found, 400u);  // the boxes did meet the surface
+}
+
+// A cell's leaf from the BVH's untested candidates (what refining a coarse leaf under a dab makes
+// of the children off the dab) against make_leaf of the cell's exact list: the same tag, sides
+// and colours, in any candidate order and with repeats, and no leaf where the list is empty. On
+// a sphere with two sheets 0.002 apart through it, so that many cells have two sides.
+TEST(PaintGeometry, LeafFromCandidatesEqualsTheLeafOfTheList) {
+  const Mesh m =
+      test::merge({test::uv_sphere(1.0, 30, 60), test::sheet(-1.2, -0.2, -0.6, 0.6, 0.0, 25, true),
+                   test::sheet(-1.2, -0.2, -0.6, 0.6, 0.002, 25, false)});
+  const PaintSurface s(m);
+  OctreeTexture t = OctreeTexture::create(s, pack_rgba8(10, 20, 30, 40));
+  const detail::Refiner r(t, s);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(0, 1);
+  size_t leaves = 0, two_sided = 0, empty = 0;
+  for (int iter = 0; iter < 4000; ++iter) {
+    const int level = 1 + int(rng() % 11);
+    // The cell holding a point of a triangle three times in four, else any cell.
+    const uint32_t tri = uint32_t(rng() % s.triangle_count());
+    const float a = u(rng), b = u(rng) * (1 - a);
+    const uint32_t n = 1u << level;
+    uint32_t xyz[3];
+    for (int k = 0; k < 3; ++k) {
+      const float p = iter % 4 ? s.corner(tri, 0)[k] * (1 - a - b) + s.corner(tri, 1)[k] * a +
+                                     s.corner(tri, 2)[k] * b
+                               : t.origin()[k] + t.size() * u(rng);
+      const float cell = std::floor((p - t.origin()[k]) / t.size() * float(n));
+      xyz[k] = uint32_t(std::clamp(cell, 0.0f, float(n - 1)));
+    }
+    const detail::CellBox cb = r.box(level, xyz[0], xyz[1], xyz[2]);
+    const float c[3] = {cb.c.x, cb.c.y, cb.c.z};
+    std::vector<uint32_t> list, candidates;
+    s.triangles_in_box(c, cb.h, r.slack(), list);
+    s.box_candidates(c, cb.h, r.slack(), candidates);
+    for (uint32_t x : list)
+      ASSERT_NE(std::find(candidates.begin(), candidates.end(), x), candidates.end());
+    detail::LeafCell parent;
+    parent.tag = uint8_t(1 + rng() % octree::kTagCount);
+    parent.dbl = rng() % 2 != 0;
+    parent.s[0] = pack_rgba8(1, 2, 3, 4), parent.s[1] = pack_rgba8(5, 6, 7, 8);
+    const detail::LeafCell* from = iter % 5 ? &parent : nullptr;
+    for (int order = 0; order < 2; ++order) {
+      if (order == 1) {  // shuffled, with repeats
+        const size_t k = candidates.size();
+        for (size_t i = 0; i < k; i += 3) candidates.push_back(candidates[i]);
+        std::shuffle(candidates.begin(), candidates.end(), rng);
+      }
+      detail::LeafCell got;
+      ASSERT_EQ(r.leaf_from_candidates(candidates, cb, from, got), !list.empty()) << iter;
+      if (list.empty()) continue;
+      const detail::LeafCell want = r.make_leaf(list, from);
+      ASSERT_EQ(got.tag, want.tag) << iter;
+      ASSERT_EQ(got.dbl, want.dbl) << iter;
+      ASSERT_EQ(got.s[0], want.s[0]) << iter;
+      if (want.dbl) {
+        ASSERT_EQ(got.s[1], want.s[1]) << iter;
+      }
+    }
+    list.empty() ? ++empty : ++leaves;
+    if (!list.empty() && r.make_leaf(list, from).dbl) ++two_sided;
+  }
+  // Both kinds of cells, and two-sided ones, were met.
+  EXPECT_GT(leaves, 2000u);
+  EXPECT_GT(empty, 200u);
+  EXPECT_GT(two_sided, 20u);
 }
 
 }  // namespace
