@@ -37,7 +37,7 @@ std::vector<uint32_t> all_triangles(const PaintSurface& s) {
 
 // Straight-alpha blend of `src` into `dst` at strength w in [0,1].
 Rgba8 blend(Rgba8 dst, const float src[4], BlendMode mode, float w) {
-  float d[4], o[4];
+  float d[4], o[4] = {0, 0, 0, 0};  // every mode sets all four
   rgba8_to_float(dst, d);
   const float a = w * src[3];
   switch (mode) {
@@ -59,7 +59,7 @@ Rgba8 blend(Rgba8 dst, const float src[4], BlendMode mode, float w) {
       o[3] = d[3] * (1 - w);
       break;
   }
-  return rgba8_from_float(o);
+  return rgba8_from_floats(o[0], o[1], o[2], o[3]);
 }
 
 inline float smooth01(float x) {

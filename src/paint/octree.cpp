@@ -28,24 +28,7 @@ constexpr std::array<float, 256> kByteToUnit = [] {
 }  // namespace
 
 Rgba8 rgba8_from_float(const float rgba[4]) {
-  // The four channels at once (a dab blends one colour per texel): each clamped to [0, 1]
-  // (non-finite values give 0), then std::lround(255 v) without the library call: u - trunc(u)
-  // is exact for u in [0, 255], so ties go up, away from zero, as lround's do.
-  using F4 = float __attribute__((vector_size(16)));
-  using I4 = int32_t __attribute__((vector_size(16)));
-  F4 v;
-  std::memcpy(&v, rgba, sizeof v);
-  const F4 zero = {0, 0, 0, 0}, one = {1, 1, 1, 1}, half = {0.5f, 0.5f, 0.5f, 0.5f};
-  const F4 big = {std::numeric_limits<float>::max(), std::numeric_limits<float>::max(),
-                  std::numeric_limits<float>::max(), std::numeric_limits<float>::max()};
-  const I4 finite = (F4)((I4)v & 0x7fffffff) <= big;  // false for infinities and NaNs
-  F4 c = v > zero ? v : zero;                         // NaN lanes are masked below
-  c = c < one ? c : one;
-  c = (F4)((I4)c & finite);
-  const F4 u = c * 255.0f;
-  const I4 r = __builtin_convertvector(u, I4);
-  const I4 b = r - ((u - __builtin_convertvector(r, F4)) >= half);  // true lanes are -1
-  return pack_rgba8(uint32_t(b[0]), uint32_t(b[1]), uint32_t(b[2]), uint32_t(b[3]));
+  return rgba8_from_floats(rgba[0], rgba[1], rgba[2], rgba[3]);
 }
 
 void rgba8_to_float(Rgba8 c, float rgba[4]) {

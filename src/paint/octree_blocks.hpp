@@ -22,6 +22,28 @@ inline int popc64(uint64_t x) {
   return std::popcount(x);
 }
 
+/// rgba8_from_float of (r, g, b, a), inline for the callers that make one per texel (a dab's
+/// blends): the channels built in registers instead of read back from just-stored floats.
+inline Rgba8 rgba8_from_floats(float r, float g, float b, float a) {
+  // The four channels at once: each clamped to [0, 1] (non-finite values give 0), then
+  // std::lround(255 v) without the library call: u - trunc(u) is exact for u in [0, 255], so
+  // ties go up, away from zero, as lround's do.
+  using F4 = float __attribute__((vector_size(16)));
+  using I4 = int32_t __attribute__((vector_size(16)));
+  const F4 v = {r, g, b, a};
+  const F4 zero = {0, 0, 0, 0}, one = {1, 1, 1, 1}, half = {0.5f, 0.5f, 0.5f, 0.5f};
+  const float mx = 3.40282347e+38f;  // the largest finite float
+  const F4 big = {mx, mx, mx, mx};
+  const I4 finite = (F4)((I4)v & 0x7fffffff) <= big;  // false for infinities and NaNs
+  F4 c = v > zero ? v : zero;                         // NaN lanes are masked below
+  c = c < one ? c : one;
+  c = (F4)((I4)c & finite);
+  const F4 u = c * 255.0f;
+  const I4 q = __builtin_convertvector(u, I4);
+  const I4 k = q - ((u - __builtin_convertvector(q, F4)) >= half);  // true lanes are -1
+  return pack_rgba8(uint32_t(k[0]), uint32_t(k[1]), uint32_t(k[2]), uint32_t(k[3]));
+}
+
 /// A leaf cell's content: tag, one or two samples.
 struct LeafCell {
   uint8_t tag = 0;
