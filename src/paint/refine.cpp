@@ -139,11 +139,61 @@ void Refiner::split(std::span<const uint32_t> in, const CellBox& b, const CellBo
 
 namespace {
 
-// Lists this long are split in chunks on TBB's threads (a coarse cell's full list: thousands of
-// triangles, on the path every first dab over an area waits for).
+// Lists this long are split in chunks on TBB's threads (a coarse cell's full list, a dab's list
+// above its task cells: thousands of triangles, on the path every dab waits for).
 constexpr size_t kChunk = 512;
 
 }  // namespace
+
+bool Refiner::whole_list_in_one(const ListBox& box, const CellBox& nb, const CellBox kids[8],
+                                uint32_t want, int& only) const {
+  // split_loop's sides: a triangle whose lowest corner lies above c + slack reaches only the
+  // upper child along that axis, one whose highest lies below c - slack only the lower.
+  const float c[3] = {nb.c.x, nb.c.y, nb.c.z};
+  int k = 0;
+  for (int a = 0; a < 3; ++a) {
+    if (box.lo[a] > c[a] + slack_)
+      k |= 1 << a;
+    else if (!(box.hi[a] < c[a] - slack_))
+      return false;
+  }
+  only = -1;
+  if (!(want >> k & 1)) return true;
+  if (!all_inside(box, kids[k])) return false;
+  only = k;
+  return true;
+}
+
+bool Refiner::all_inside(const ListBox& box, const CellBox& b) const {
+  // tri_inside_box(b) for every triangle of the list: its test bounds each corner's offset
+  // from the centre, and the rounded offsets of the corners lie between those of the bounds.
+  const float e = b.h + slack_;
+  if (!(e > 1e-12f)) return false;
+  const float m = e * (1.0f - 1.0f / 1024.0f);
+  const float c[3] = {b.c.x, b.c.y, b.c.z};
+  for (int a = 0; a < 3; ++a)
+    if (!(std::fabs(box.lo[a] - c[a]) <= m && std::fabs(box.hi[a] - c[a]) <= m)) return false;
+  return true;
+}
+
+void Refiner::split_maybe_parallel(const Ctx& w, std::span<const uint32_t> in, const CellBox& b,
+                                   const CellBox kids[8], Split& out, uint32_t want) const {
+  if (!w.log || in.size() < 2 * kChunk) {
+    split(in, b, kids, out, want);
+    return;
+  }
+  const size_t chunks = (in.size() + kChunk - 1) / kChunk;
+  std::vector<Split> part(chunks);
+  tbb::parallel_for(size_t(0), chunks, [&](size_t i) {
+    const size_t lo = i * kChunk, hi = std::min(in.size(), lo + kChunk);
+    split(in.subspan(lo, hi - lo), b, kids, part[i], want);
+  });
+  for (int c = 0; c < 8; ++c) {
+    out[size_t(c)].clear();
+    for (const Split& p : part)
+      out[size_t(c)].insert(out[size_t(c)].end(), p[size_t(c)].begin(), p[size_t(c)].end());
+  }
+}
 
 void Refiner::full_tris(const CellBox& b, std::span<const uint32_t> region_tris,
                         std::vector<uint32_t>& out) const {
@@ -333,23 +383,8 @@ GeneralNode Refiner::refine_leaf(Ctx& w, const CellBox& cb, const LeafCell& leaf
       tbb::parallel_for(0, 8, query);
     else
       for (int c = 0; c < 8; ++c) query(c);
-  } else if (const std::span<const uint32_t> full = *full_list;
-             w.log && full.size() >= 2 * kChunk) {
-    // A coarse cell's list in chunks at once, each chunk's parts appended in chunk order: the
-    // lists one split makes.
-    const size_t chunks = (full.size() + kChunk - 1) / kChunk;
-    std::vector<Split> part(chunks);
-    tbb::parallel_for(size_t(0), chunks, [&](size_t i) {
-      const size_t lo = i * kChunk, hi = std::min(full.size(), lo + kChunk);
-      split(full.subspan(lo, hi - lo), cb, kids, part[i]);
-    });
-    for (int c = 0; c < 8; ++c) {
-      parts[size_t(c)].clear();
-      for (const Split& p : part)
-        parts[size_t(c)].insert(parts[size_t(c)].end(), p[size_t(c)].begin(), p[size_t(c)].end());
-    }
   } else {
-    split(full, cb, kids, parts);
+    split_maybe_parallel(w, *full_list, cb, kids, parts);
   }
   for (int c = 0; c < 8; ++c) {
     const std::vector<uint32_t>& fc = parts[size_t(c)];
@@ -549,7 +584,7 @@ void Refiner::visit_brick(Ctx& w, Brick& b, const CellBox& bb, std::span<const u
 
 void Refiner::visit_general(Ctx& w, GeneralNode& n, const CellBox& nb,
                             std::span<const uint32_t> tris,
-                            const std::vector<uint32_t>* parent_full) {
+                            const std::vector<uint32_t>* parent_full, const ListBox* box) {
   CellBox kids[8];
   children(nb, kids);
   const uint32_t want = meeting(kids);
@@ -559,8 +594,15 @@ void Refiner::visit_general(Ctx& w, GeneralNode& n, const CellBox& nb,
   // parent_full, both sorted) splits into the same lists less the triangles it lacks.
   const bool full_split = parent_full != nullptr;
   const bool same = full_split && tris.size() == parent_full->size();
-  if (!full_split) {
-    split(tris, nb, kids, parts, want);
+  // Near the root a dab's list often lies in one child whole: it goes there untested, with its
+  // bounds (the lists split() would make).
+  int only = -1;
+  const bool whole = !full_split && box && whole_list_in_one(*box, nb, kids, want, only);
+  if (whole) {
+    for (int c = 0; c < 8; ++c) parts[size_t(c)].clear();
+    if (only >= 0) parts[size_t(only)].assign(tris.begin(), tris.end());
+  } else if (!full_split) {
+    split_maybe_parallel(w, tris, nb, kids, parts, want);
   } else if (!same) {
     for (int c = 0; c < 8; ++c) intersect_sorted(full_parts[size_t(c)], tris, parts[size_t(c)]);
   }
@@ -570,12 +612,12 @@ void Refiner::visit_general(Ctx& w, GeneralNode& n, const CellBox& nb,
     if (!tparts[size_t(c)].empty() && (want >> c & 1)) todo |= 1u << c;
   if (tasks_ && nb.level <= depth_ - kTaskDepth - 1) {
     visit_parts(w, n, kids, todo, tparts, full_split ? &full_parts : nullptr,
-                nb.level == depth_ - kTaskDepth - 1);
+                nb.level == depth_ - kTaskDepth - 1, whole ? box : nullptr);
   } else {
     for (int c = 0; c < 8; ++c)
       if (todo >> c & 1)
         visit_child(w, n, c, kids[c], tparts[size_t(c)],
-                    full_split ? &full_parts[size_t(c)] : nullptr);
+                    full_split ? &full_parts[size_t(c)] : nullptr, whole ? box : nullptr);
   }
   if (w.painter) w.painter->flush();
   n.avg = general_avg(w, n);
@@ -624,7 +666,8 @@ void Refiner::put_log(Log& l) {
 }
 
 void Refiner::visit_parts(Ctx& w, GeneralNode& n, const CellBox kids[8], uint32_t todo,
-                          const Split& tparts, const Split* full_parts, bool task_cells) {
+                          const Split& tparts, const Split* full_parts, bool task_cells,
+                          const ListBox* box) {
   int cs[8], count = 0;
   Shard* sh[8] = {};
   for (int c = 0; c < 8; ++c) {
@@ -639,7 +682,7 @@ void Refiner::visit_parts(Ctx& w, GeneralNode& n, const CellBox kids[8], uint32_
   auto visit = [&](Ctx& x, int i) {
     const int c = cs[i];
     visit_child(x, n, c, kids[c], tparts[size_t(c)],
-                full_parts ? &(*full_parts)[size_t(c)] : nullptr);
+                full_parts ? &(*full_parts)[size_t(c)] : nullptr, box);
   };
   if (!w.log || count < 2) {
     // One thread: the same visits in order, each task cell through its shard.
@@ -690,7 +733,8 @@ void Refiner::visit_parts(Ctx& w, GeneralNode& n, const CellBox kids[8], uint32_
 }
 
 void Refiner::visit_child(Ctx& w, GeneralNode& n, int c, const CellBox& cb,
-                          std::span<const uint32_t> tc, const std::vector<uint32_t>* full_c) {
+                          std::span<const uint32_t> tc, const std::vector<uint32_t>* full_c,
+                          const ListBox* box_c) {
   const int level = cb.level;
   std::vector<uint32_t>& full = w.scratch[size_t(level - 1)].full;
   // The child's full list, from its parent's when known (no BVH query, and no triangles from
@@ -747,7 +791,7 @@ void Refiner::visit_child(Ctx& w, GeneralNode& n, int c, const CellBox& cb,
       uint32_t at = 0;
       const std::span<const uint32_t> words = block(w, n.ptr[c], at);
       GeneralNode g = decode_general(words, at, n.info[c]);
-      visit_general(w, g, cb, tc);
+      visit_general(w, g, cb, tc, nullptr, box_c);
       Brick b;
       if (try_compact(w, g, b)) {
         for (int k = 0; k < 8; ++k)
@@ -836,8 +880,21 @@ void Refiner::run(const Region& region, std::span<const uint32_t> tris, int dept
     GeneralNode root =
         octree::occupied(info) ? decode_general(ed_.pool(), ptr, info) : GeneralNode{};
     const CellBox rb = box(0, 0, 0, 0);
+    // The triangles meeting the root's box: all of them when their corners' bounds lie inside
+    // it (the texture was made for this mesh), and those bounds let the visit skip splits.
+    ListBox tbox = {{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
+    for (uint32_t t : tris)
+      for (int v = 0; v < 3; ++v)
+        for (int a = 0; a < 3; ++a) {
+          const float x = s_.corner(t, v)[a];
+          tbox.lo[a] = std::min(tbox.lo[a], x), tbox.hi[a] = std::max(tbox.hi[a], x);
+        }
+    const bool known = !tris.empty() && all_inside(tbox, rb);
     std::vector<uint32_t> t0;
-    filter(tris, rb, t0);
+    if (known)
+      t0.assign(tris.begin(), tris.end());
+    else
+      filter(tris, rb, t0);
     // On several threads every write waits in a log, replayed once the visit is over (reads of
     // the pool meanwhile see it as it was); temporary addresses need room above the pool.
     temp0_ = uint32_t(ed_.pool().size());
@@ -848,7 +905,7 @@ void Refiner::run(const Region& region, std::span<const uint32_t> tris, int dept
     main.log = threads ? &main_log_ : nullptr;
     main_log_.clear();
     if (!t0.empty()) {
-      visit_general(main, root, rb, t0);
+      visit_general(main, root, rb, t0, nullptr, known ? &tbox : nullptr);
       bool any = false;
       for (int c = 0; c < 8; ++c) any |= root.kind[c] != CellKind::empty;
       if (any) {

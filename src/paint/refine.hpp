@@ -72,6 +72,11 @@ class LeafPainter {
   virtual LeafPainter* shard(uint64_t /*key*/) { return this; }
 };
 
+/// The bounds of a list's triangles' corners.
+struct ListBox {
+  float lo[3], hi[3];
+};
+
 /// Where to refine and paint: everywhere, or cells meeting a ball.
 struct Region {
   bool everything = true;
@@ -126,6 +131,14 @@ class Refiner {
   /// The same with b's children already at hand (`kids`, as children() gives them).
   void split(std::span<const uint32_t> in, const CellBox& b, const CellBox kids[8], Split& out,
              uint32_t want = 0xffu) const;
+  /// Whether split(tris, nb, kids, out, want) would give every triangle of a list whose
+  /// corners' bounds are `box` to one child, keeping all of them: then `only` is that child
+  /// (-1: one not in want, every list empty). Decided from the bounds alone (the split's
+  /// bounding-box sides and tri_inside_box, which only grow with them): exact.
+  bool whole_list_in_one(const ListBox& box, const CellBox& nb, const CellBox kids[8],
+                         uint32_t want, int& only) const;
+  /// Whether every triangle of a list whose corners' bounds are `box` passes tri_inside_box(b).
+  bool all_inside(const ListBox& box, const CellBox& b) const;
   /// The 8 children of a box: child(b, c) for each c, with each of the 6 distinct coordinates
   /// computed once (box()'s formula) instead of 24 times.
   void children(const CellBox& b, CellBox kids[8]) const {
@@ -257,17 +270,25 @@ class Refiner {
   /// `full` (may be null): every triangle meeting the node's box, when known (a node just made
   /// by refining): its children's lists are filtered from it instead of queried; then the
   /// node's scratch already holds full split by child (`full_parts`), as refine_leaf left it.
+  /// `box` (may be null): the bounds of tris's corners, when known.
   void visit_general(Ctx& w, GeneralNode& n, const CellBox& nb, std::span<const uint32_t> tris,
-                     const std::vector<uint32_t>* full = nullptr);
+                     const std::vector<uint32_t>* full = nullptr, const ListBox* box = nullptr);
   /// visit_general's work on child c (box cb, region list tc) of n: makes, refines, visits and
-  /// stores it, writing only n's slot c. full_c: the child's full list when n was just refined.
+  /// stores it, writing only n's slot c. full_c: the child's full list when n was just refined;
+  /// box_c: the bounds of tc's corners, when known.
   void visit_child(Ctx& w, GeneralNode& n, int c, const CellBox& cb, std::span<const uint32_t> tc,
-                   const std::vector<uint32_t>* full_c);
+                   const std::vector<uint32_t>* full_c, const ListBox* box_c);
   /// visit_child on the children in `todo` (bit c) of a node above the task cells (with
   /// `task_cells`, its children are task cells: each visited through its shard): at once on
   /// TBB's threads when writes are logged (a run on several threads) and there are several.
+  /// `box`: the bounds of the children's lists when one child holds its parent's whole list.
   void visit_parts(Ctx& w, GeneralNode& n, const CellBox kids[8], uint32_t todo,
-                   const Split& tparts, const Split* full_parts, bool task_cells);
+                   const Split& tparts, const Split* full_parts, bool task_cells,
+                   const ListBox* box);
+  /// split() of a list on TBB's threads in chunks when it is long and writes are logged (a run
+  /// on several threads), each chunk's parts appended in chunk order: the same lists.
+  void split_maybe_parallel(const Ctx& w, std::span<const uint32_t> in, const CellBox& b,
+                            const CellBox kids[8], Split& out, uint32_t want = 0xffu) const;
   /// Makes the log's writes in order, its children's where they hang.
   void replay(Log& log);
   /// A temporary address's real one once replayed (real ones as they are).

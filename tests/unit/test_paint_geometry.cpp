@@ -215,5 +215,57 @@ TEST(PaintGeometry, LeafFromCandidatesEqualsTheLeafOfTheList) {
   EXPECT_GT(two_sided, 20u);
 }
 
+// The split shortcut near the root (a list whose corners' bounds put every triangle in one
+// child, inside its box, goes there whole, untested) against split() itself: the same lists
+// whenever it claims so, for lists of triangles around points in cells of every level.
+TEST(PaintGeometry, WholeListShortcutGivesTheSplitsLists) {
+  const Mesh m = test::merge(
+      {test::uv_sphere(1.0, 30, 60), test::sheet(-1.2, -0.2, -0.6, 0.6, 0.0, 25, true)});
+  const PaintSurface s(m);
+  OctreeTexture t = OctreeTexture::create(s);
+  const detail::Refiner r(t, s);
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<float> u(0, 1);
+  size_t fired = 0, nowhere = 0, declined = 0;
+  for (int iter = 0; iter < 3000; ++iter) {
+    const int level = int(rng() % 4);  // cells far larger than the triangles
+    const uint32_t tri = uint32_t(rng() % s.triangle_count());
+    const float p[3] = {s.corner(tri, 0)[0], s.corner(tri, 0)[1], s.corner(tri, 0)[2]};
+    const uint32_t n = 1u << level;
+    uint32_t xyz[3];
+    for (int k = 0; k < 3; ++k) {
+      const float cell = std::floor((p[k] - t.origin()[k]) / t.size() * float(n));
+      xyz[k] = uint32_t(std::clamp(cell, 0.0f, float(n - 1)));
+    }
+    const detail::CellBox cb = r.box(level, xyz[0], xyz[1], xyz[2]);
+    std::vector<uint32_t> list;
+    s.triangles_near(p, cb.h * std::ldexp(1.0f, -2 - int(rng() % 6)), list);
+    detail::ListBox box = {{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
+    for (uint32_t x : list)
+      for (int v = 0; v < 3; ++v)
+        for (int a = 0; a < 3; ++a)
+          box.lo[a] = std::min(box.lo[a], s.corner(x, v)[a]),
+          box.hi[a] = std::max(box.hi[a], s.corner(x, v)[a]);
+    detail::CellBox kids[8];
+    r.children(cb, kids);
+    const uint32_t want = iter % 3 ? 0xffu : uint32_t(rng() % 256);
+    int only = -2;
+    if (list.empty() || !r.whole_list_in_one(box, cb, kids, want, only)) {
+      ++declined;
+      continue;
+    }
+    detail::Refiner::Split out;
+    r.split(list, cb, kids, out, want);
+    for (int c = 0; c < 8; ++c)
+      ASSERT_EQ(out[size_t(c)], c == only ? list : std::vector<uint32_t>{})
+          << "iteration " << iter << " level " << level << " child " << c;
+    only < 0 ? ++nowhere : ++fired;
+  }
+  // It took lists whole, dropped some (a child not wanted), and left others to the split.
+  EXPECT_GT(fired, 140u);
+  EXPECT_GT(nowhere, 80u);
+  EXPECT_GT(declined, 1000u);
+}
+
 }  // namespace
 }  // namespace limn
