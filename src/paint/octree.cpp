@@ -237,7 +237,14 @@ void OctreeEditor::release(uint32_t ptr, uint32_t n, bool brick) {
 }
 
 void OctreeEditor::write_block(uint32_t ptr, std::span<const uint32_t> words) {
-  for (size_t i = 0; i < words.size(); ++i) set(ptr + uint32_t(i), words[i]);
+  // set() word by word, written out: a dab's replay writes every block it made through here.
+  uint32_t* w = t_.pool_.data() + ptr;
+  if (!t_.recording_) {
+    std::copy(words.begin(), words.end(), w);
+    return;
+  }
+  for (size_t i = 0; i < words.size(); ++i)
+    if (w[i] != words[i]) log(kSet, ptr + uint32_t(i), w[i], words[i]), w[i] = words[i];
 }
 
 uint32_t OctreeEditor::replace_block(uint32_t ptr, uint32_t old_n, std::span<const uint32_t> words,
