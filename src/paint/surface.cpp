@@ -324,17 +324,26 @@ void PaintSurface::triangles_near(const float c[3], float r, std::vector<uint32_
   out.erase(std::unique(out.begin() + std::ptrdiff_t(first), out.end()), out.end());
 }
 
+namespace {
+
+// The ball query both box queries make, `callback` deciding what each candidate adds.
+void ask_box(RTCScene scene, BoxQuery& q, RTCPointQueryFunction callback) {
+  RTCPointQuery pq;
+  pq.x = q.c.x, pq.y = q.c.y, pq.z = q.c.z;
+  pq.time = 0;
+  pq.radius = box_query_radius(q.h, q.slack);
+  RTCPointQueryContext ctx;
+  rtcInitPointQueryContext(&ctx);
+  rtcPointQuery(scene, &pq, &ctx, callback, &q);
+}
+
+}  // namespace
+
 void PaintSurface::triangles_in_box(const float c[3], float h, float slack,
                                     std::vector<uint32_t>& out) const {
   const size_t first = out.size();
   BoxQuery q{this, &out, {c[0], c[1], c[2]}, h, slack};
-  RTCPointQuery pq;
-  pq.x = c[0], pq.y = c[1], pq.z = c[2];
-  pq.time = 0;
-  pq.radius = box_query_radius(h, slack);
-  RTCPointQueryContext ctx;
-  rtcInitPointQueryContext(&ctx);
-  rtcPointQuery(embree_->scene, &pq, &ctx, &box_callback, &q);
+  ask_box(embree_->scene, q, &box_callback);
   std::sort(out.begin() + std::ptrdiff_t(first), out.end());
   out.erase(std::unique(out.begin() + std::ptrdiff_t(first), out.end()), out.end());
 }
@@ -342,13 +351,7 @@ void PaintSurface::triangles_in_box(const float c[3], float h, float slack,
 void PaintSurface::box_candidates(const float c[3], float h, float slack,
                                   std::vector<uint32_t>& out) const {
   BoxQuery q{this, &out, {c[0], c[1], c[2]}, h, slack};
-  RTCPointQuery pq;
-  pq.x = c[0], pq.y = c[1], pq.z = c[2];
-  pq.time = 0;
-  pq.radius = box_query_radius(h, slack);
-  RTCPointQueryContext ctx;
-  rtcInitPointQueryContext(&ctx);
-  rtcPointQuery(embree_->scene, &pq, &ctx, &candidate_callback, &q);
+  ask_box(embree_->scene, q, &candidate_callback);
 }
 
 }  // namespace limn
