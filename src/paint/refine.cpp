@@ -365,8 +365,8 @@ GeneralNode Refiner::refine_leaf(Ctx& w, const CellBox& cb, const LeafCell& leaf
   LeafCell off_leaf[8];
   if (!full_list) {
     // Each child's list from the BVH (at once on the threads with a log): the lists splitting
-    // the cell's own would give, without querying it first.
-    // A child off the region (visit_general will not visit it) needs only its leaf.
+    // the cell's own would give, without querying it first. A child off the region
+    // (visit_general will not visit it) needs only its leaf, found from the query's candidates.
     auto query = [&](int c) {
       const float kc[3] = {kids[c].c.x, kids[c].c.y, kids[c].c.z};
       std::vector<uint32_t>& out = parts[size_t(c)];
