@@ -1,11 +1,15 @@
 // The octree texture's pool: block codec, allocation with free lists, the journal hook, stats,
 // the structural check and sample enumeration.
+#include <sys/mman.h>
+
 #include <algorithm>
 #include <array>
 #include <bit>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
+#include <new>
 #include <stdexcept>
 #include <string>
 
@@ -26,6 +30,28 @@ constexpr std::array<float, 256> kByteToUnit = [] {
 }();
 
 }  // namespace
+
+namespace detail {
+
+void* pool_allocate(std::size_t bytes) {
+  if (bytes < kHugeBytes) return ::operator new(bytes);
+  const std::size_t size = (bytes + kHugeBytes - 1) / kHugeBytes * kHugeBytes;
+  void* p = std::aligned_alloc(kHugeBytes, size);
+  if (!p) throw std::bad_alloc();
+#ifdef MADV_HUGEPAGE
+  madvise(p, size, MADV_HUGEPAGE);  // advice only: where refused, 4 KiB pages as before
+#endif
+  return p;
+}
+
+void pool_deallocate(void* p, std::size_t bytes) noexcept {
+  if (bytes < kHugeBytes)
+    ::operator delete(p);
+  else
+    std::free(p);
+}
+
+}  // namespace detail
 
 Rgba8 rgba8_from_float(const float rgba[4]) {
   return rgba8_from_floats(rgba[0], rgba[1], rgba[2], rgba[3]);
@@ -448,7 +474,7 @@ OctreeTextureStats OctreeTexture::stats() const {
 
 void OctreeTexture::compact() {
   if (recording_) throw std::logic_error("OctreeTexture::compact while a stroke is recorded");
-  std::vector<uint32_t> out = {0, 0};
+  Pool out = {0, 0};
   std::vector<std::vector<uint32_t>> gaps;
   std::vector<uint32_t> words;
   // Reserves a block; general blocks start at even words (a one-word gap becomes a free block).

@@ -2,6 +2,8 @@
 // foreign and structurally broken files are refused with one line naming the file.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -152,6 +154,48 @@ TEST(PaintFile, SaveLoadRoundTripsExactly) {
   EXPECT_EQ(slurp(f), serialize_lot(varied(s)));  // the good file is as it was
   EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 2);
   fs::remove_all(dir);
+}
+
+// A pool past 2 MiB lives in 2 MiB-aligned storage (huge pages where the system has them, see
+// detail::PoolAllocator): a copy, a save/load round trip, a stroke's undo and compaction keep
+// every word.
+TEST(PaintFile, PoolsPastTwoMiBKeepEveryWord) {
+  const Mesh m = test::uv_sphere(1.0, 30, 60);
+  const PaintSurface s(m);
+  OctreeTexture t = OctreeTexture::create(s);
+  refine_surface(t, s, 9);
+  ASSERT_GT(t.words().size() * sizeof(uint32_t), detail::kHugeBytes);
+  auto aligned = [](const OctreeTexture& x) {
+    return reinterpret_cast<uintptr_t>(x.words().data()) % detail::kHugeBytes == 0;
+  };
+  EXPECT_TRUE(aligned(t));
+  const OctreeTexture copy = t;
+  EXPECT_TRUE(aligned(copy));
+  EXPECT_TRUE(copy == t);
+  const std::string bytes = serialize_lot(t);
+  const OctreeTexture loaded = parse_lot(bytes, "memory");
+  EXPECT_TRUE(aligned(loaded));
+  EXPECT_TRUE(loaded == t);
+  PaintHistory h;
+  stroke(t, s, h, 10, 0.3f, BlendMode::mix, {0, 0, 1, 0.3f, 0, 0.95f});
+  EXPECT_NE(serialize_lot(t), bytes);
+  ASSERT_TRUE(h.undo(t));
+  EXPECT_EQ(serialize_lot(t), bytes);
+  // Compaction moves every block into a new pool: the same samples where they were.
+  OctreeTexture packed = t;
+  packed.compact();
+  EXPECT_TRUE(aligned(packed));
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<float> d(-1, 1);
+  OctreeSampler a(t), b(packed);
+  for (int i = 0; i < 5000; ++i) {
+    float p[3] = {d(rng), d(rng), d(rng)};
+    const float len = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+    for (float& x : p) x /= len;  // on the sphere
+    Rgba8 ca, cb;
+    ASSERT_EQ(a.nearest(p, p, ca), b.nearest(p, p, cb));
+    ASSERT_EQ(ca, cb);
+  }
 }
 
 TEST(PaintFile, EveryStateOfAPaintingRoundTrips) {
