@@ -73,10 +73,19 @@ inline bool tri_box_overlap(V3 c, float h, V3 a, V3 b, V3 d, float slack) {
 // its projections |sum ax_k v_k| <= (1 - 2^-10) e sum |ax_k| plus a few units of rounding, below
 // the radius e sum |ax_k| it compares against (less a few units): no axis separates. (e > 1e-12
 // keeps the products far from underflow.)
-inline bool tri_inside_box(V3 c, float h, V3 a, V3 b, V3 d, float slack) {
+// tri_inside_box's bound on each corner's offset from the centre (m); false where the box is
+// too small for it. Shared with the refiner's list-wide form of the test, which must use the
+// same float operations.
+inline bool inside_margin(float h, float slack, float& m) {
   const float e = h + slack;
   if (!(e > 1e-12f)) return false;
-  const float m = e * (1.0f - 1.0f / 1024.0f);
+  m = e * (1.0f - 1.0f / 1024.0f);
+  return true;
+}
+
+inline bool tri_inside_box(V3 c, float h, V3 a, V3 b, V3 d, float slack) {
+  float m;
+  if (!inside_margin(h, slack, m)) return false;
   const V3 v0 = a - c, v1 = b - c, v2 = d - c;
   return std::fabs(v0.x) <= m && std::fabs(v0.y) <= m && std::fabs(v0.z) <= m &&
          std::fabs(v1.x) <= m && std::fabs(v1.y) <= m && std::fabs(v1.z) <= m &&

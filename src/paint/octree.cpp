@@ -7,8 +7,6 @@
 #include <bit>
 #include <cmath>
 #include <cstdlib>
-#include <cstring>
-#include <limits>
 #include <new>
 #include <stdexcept>
 #include <string>

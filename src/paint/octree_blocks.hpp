@@ -5,6 +5,7 @@
 
 #include <bit>
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <string>
 #include <vector>
@@ -32,7 +33,7 @@ inline Rgba8 rgba8_from_floats(float r, float g, float b, float a) {
   using I4 = int32_t __attribute__((vector_size(16)));
   const F4 v = {r, g, b, a};
   const F4 zero = {0, 0, 0, 0}, one = {1, 1, 1, 1}, half = {0.5f, 0.5f, 0.5f, 0.5f};
-  const float mx = 3.40282347e+38f;  // the largest finite float
+  const float mx = std::numeric_limits<float>::max();
   const F4 big = {mx, mx, mx, mx};
   const I4 finite = (F4)((I4)v & 0x7fffffff) <= big;  // false for infinities and NaNs
   F4 c = v > zero ? v : zero;                         // NaN lanes are masked below

@@ -167,9 +167,8 @@ bool Refiner::whole_list_in_one(const ListBox& box, const CellBox& nb, const Cel
 bool Refiner::all_inside(const ListBox& box, const CellBox& b) const {
   // tri_inside_box(b) for every triangle of the list: its test bounds each corner's offset
   // from the centre, and the rounded offsets of the corners lie between those of the bounds.
-  const float e = b.h + slack_;
-  if (!(e > 1e-12f)) return false;
-  const float m = e * (1.0f - 1.0f / 1024.0f);
+  float m;
+  if (!inside_margin(b.h, slack_, m)) return false;
   const float c[3] = {b.c.x, b.c.y, b.c.z};
   for (int a = 0; a < 3; ++a)
     if (!(std::fabs(box.lo[a] - c[a]) <= m && std::fabs(box.hi[a] - c[a]) <= m)) return false;
@@ -218,17 +217,19 @@ Rgba8 inherit(const PaintSurface& s, const LeafCell* parent, Rgba8 background, u
 
 }  // namespace
 
-LeafCell Refiner::make_leaf(std::span<const uint32_t> tris, const LeafCell* parent) const {
+LeafCell Refiner::leaf_of(uint32_t first, uint32_t back, const LeafCell* parent) const {
   LeafCell cell;
-  cell.tag = uint8_t(s_.tag(tris[0]));
-  cell.s[0] = inherit(s_, parent, ed_.background(), tris[0]);
-  for (uint32_t t : tris)
-    if (s_.side(cell.tag, t) == 1) {
-      cell.dbl = true;
-      cell.s[1] = inherit(s_, parent, ed_.background(), t);
-      break;
-    }
+  cell.tag = uint8_t(s_.tag(first));
+  cell.s[0] = inherit(s_, parent, ed_.background(), first);
+  if (back != ~0u) cell.dbl = true, cell.s[1] = inherit(s_, parent, ed_.background(), back);
   return cell;
+}
+
+LeafCell Refiner::make_leaf(std::span<const uint32_t> tris, const LeafCell* parent) const {
+  const int tag = s_.tag(tris[0]);
+  for (uint32_t t : tris)
+    if (s_.side(tag, t) == 1) return leaf_of(tris[0], t, parent);
+  return leaf_of(tris[0], ~0u, parent);
 }
 
 bool Refiner::leaf_from_candidates(std::span<const uint32_t> candidates, const CellBox& cb,
@@ -243,13 +244,11 @@ bool Refiner::leaf_from_candidates(std::span<const uint32_t> candidates, const C
   for (uint32_t t : candidates)
     if (t < first && meets_cell(t)) first = t;
   if (first == ~0u) return false;
-  out = LeafCell{};
-  out.tag = uint8_t(s_.tag(first));
-  out.s[0] = inherit(s_, parent, ed_.background(), first);
+  const int tag = s_.tag(first);
   uint32_t back = ~0u;
   for (uint32_t t : candidates)
-    if (t < back && s_.side(out.tag, t) == 1 && meets_cell(t)) back = t;
-  if (back != ~0u) out.dbl = true, out.s[1] = inherit(s_, parent, ed_.background(), back);
+    if (t < back && s_.side(tag, t) == 1 && meets_cell(t)) back = t;
+  out = leaf_of(first, back, parent);
   return true;
 }
 
@@ -890,11 +889,9 @@ void Refiner::run(const Region& region, std::span<const uint32_t> tris, int dept
           tbox.lo[a] = std::min(tbox.lo[a], x), tbox.hi[a] = std::max(tbox.hi[a], x);
         }
     const bool known = !tris.empty() && all_inside(tbox, rb);
-    std::vector<uint32_t> t0;
-    if (known)
-      t0.assign(tris.begin(), tris.end());
-    else
-      filter(tris, rb, t0);
+    std::vector<uint32_t> filtered;
+    if (!known) filter(tris, rb, filtered);
+    const std::span<const uint32_t> t0 = known ? tris : std::span<const uint32_t>(filtered);
     // On several threads every write waits in a log, replayed once the visit is over (reads of
     // the pool meanwhile see it as it was); temporary addresses need room above the pool.
     temp0_ = uint32_t(ed_.pool().size());

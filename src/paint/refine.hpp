@@ -165,6 +165,9 @@ class Refiner {
   /// A new leaf for a cell whose triangles are `tris` (non-empty), with colours inherited from
   /// `parent` (null: background).
   LeafCell make_leaf(std::span<const uint32_t> tris, const LeafCell* parent) const;
+  /// The leaf of a list whose first triangle is `first` and whose first on side 1 of that one's
+  /// tag is `back` (~0: none): what make_leaf makes of it.
+  LeafCell leaf_of(uint32_t first, uint32_t back, const LeafCell* parent) const;
   /// The leaf make_leaf gives the cell `cb` (its list: the triangles of `candidates` meeting it,
   /// sorted), found from candidates in any order, repeats allowed, with box tests only on
   /// those that could change it (a lower index than the one kept): false when none meets the

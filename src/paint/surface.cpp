@@ -181,11 +181,6 @@ bool gather_callback(RTCPointQueryFunctionArguments* args) {
   return false;
 }
 
-// The ball the box queries ask the BVH for: around the grown box.
-float box_query_radius(float h, float slack) {
-  return (h + slack) * 1.7320508f * 1.0001f;
-}
-
 struct BoxQuery {
   const PaintSurface* s;
   std::vector<uint32_t>* out;
@@ -331,7 +326,7 @@ void ask_box(RTCScene scene, BoxQuery& q, RTCPointQueryFunction callback) {
   RTCPointQuery pq;
   pq.x = q.c.x, pq.y = q.c.y, pq.z = q.c.z;
   pq.time = 0;
-  pq.radius = box_query_radius(q.h, q.slack);
+  pq.radius = (q.h + q.slack) * 1.7320508f * 1.0001f;  // the ball around the grown box
   RTCPointQueryContext ctx;
   rtcInitPointQueryContext(&ctx);
   rtcPointQuery(scene, &pq, &ctx, callback, &q);
