@@ -180,6 +180,123 @@ __attribute__((always_inline)) inline uint32_t tri_box_overlap8(const float* cx,
   return uint32_t(m[0]);
 }
 
+// A triangle's separating axes for testing it against many boxes of one half size h (grown by
+// slack): its corners' offsets from a point o (their bounds: the box axes), and per other axis
+// (its normal, then the 9 edge x box-axis cross products) the interval [lo, hi] a box centre's
+// offset from o must project into for that axis not to separate them. Built once, it tests each
+// box with one projection per axis (tri_boxes_meet8) where tri_box_overlap recomputes the
+// triangle per box: a brick's 64 leaves from one build. Offsets are taken from o (a brick's
+// centre, near the boxes), so rounding stays on the scale of the triangle's and the boxes'
+// distances from o, as tri_box_overlap's does on their distances from each box's centre: far
+// below the slack. Not the same float operations as tri_box_overlap: the two can disagree on a
+// triangle within a few units of rounding of a box's grown face.
+struct TriAxes {
+  float mn[3], mx[3];  // bounds of the corners' offsets from o
+  float ax[10][3], lo[10], hi[10];
+};
+
+// tri_axes in two steps, the bounds first: a caller that finds no box within them skips the rest.
+inline void tri_axes_bounds(V3 o, V3 a, V3 b, V3 d, V3 v[3], TriAxes& t) {
+  v[0] = a - o, v[1] = b - o, v[2] = d - o;
+  t.mn[0] = std::min({v[0].x, v[1].x, v[2].x}), t.mx[0] = std::max({v[0].x, v[1].x, v[2].x});
+  t.mn[1] = std::min({v[0].y, v[1].y, v[2].y}), t.mx[1] = std::max({v[0].y, v[1].y, v[2].y});
+  t.mn[2] = std::min({v[0].z, v[1].z, v[2].z}), t.mx[2] = std::max({v[0].z, v[1].z, v[2].z});
+}
+
+__attribute__((always_inline)) inline void tri_axes_rest(float h, float slack, const V3 v[3],
+                                                         TriAxes& t) {
+  const float e = h + slack;
+  const V3 f[3] = {v[1] - v[0], v[2] - v[1], v[0] - v[2]};
+  const V3 n = cross(f[0], f[1]);
+  {
+    const float p0 = dot(n, v[0]), p1 = dot(n, v[1]), p2 = dot(n, v[2]);
+    const float r = e * (std::fabs(n.x) + std::fabs(n.y) + std::fabs(n.z));
+    t.ax[0][0] = n.x, t.ax[0][1] = n.y, t.ax[0][2] = n.z;
+    t.lo[0] = std::min({p0, p1, p2}) - r, t.hi[0] = std::max({p0, p1, p2}) + r;
+  }
+  // Edge f x box axis: (0, -f.z, f.y), (f.z, 0, -f.x), (-f.y, f.x, 0); dot() of each with a
+  // corner, its zero term included (it adds a signed zero), as tri_axes_meet projects.
+  for (int i = 0; i < 3; ++i) {
+    const float fx = f[i].x, fy = f[i].y, fz = f[i].z;
+    float* ax = t.ax[1 + 3 * i];
+    ax[0] = 0, ax[1] = -fz, ax[2] = fy;
+    ax[3] = fz, ax[4] = 0, ax[5] = -fx;
+    ax[6] = -fy, ax[7] = fx, ax[8] = 0;
+    float p[3][3];
+    for (int j = 0; j < 3; ++j) {
+      p[0][j] = 0 * v[j].x + -fz * v[j].y + fy * v[j].z;
+      p[1][j] = fz * v[j].x + 0 * v[j].y + -fx * v[j].z;
+      p[2][j] = -fy * v[j].x + fx * v[j].y + 0 * v[j].z;
+    }
+    const float r[3] = {e * (0.0f + std::fabs(fz) + std::fabs(fy)),
+                        e * (std::fabs(fz) + 0.0f + std::fabs(fx)),
+                        e * (std::fabs(fy) + std::fabs(fx) + 0.0f)};
+    for (int k = 0; k < 3; ++k) {
+      t.lo[1 + 3 * i + k] = std::min({p[k][0], p[k][1], p[k][2]}) - r[k];
+      t.hi[1 + 3 * i + k] = std::max({p[k][0], p[k][1], p[k][2]}) + r[k];
+    }
+  }
+}
+
+inline void tri_axes(V3 o, float h, float slack, V3 a, V3 b, V3 d, TriAxes& t) {
+  V3 v[3];
+  tri_axes_bounds(o, a, b, d, v, t);
+  tri_axes_rest(h, slack, v, t);
+}
+
+// Whether the box centred at o + (x, y, z) meets the triangle of t: the scalar form of what
+// tri_boxes_meet8 and the box-axis tests of its callers decide.
+inline bool tri_axes_meet(const TriAxes& t, float h, float slack, float x, float y, float z) {
+  const float e = h + slack;
+  const float c[3] = {x, y, z};
+  for (int a = 0; a < 3; ++a)
+    if (t.mn[a] - c[a] > e || t.mx[a] - c[a] < -e) return false;
+  for (int k = 0; k < 10; ++k) {
+    const float q = t.ax[k][0] * x + t.ax[k][1] * y + t.ax[k][2] * z;
+    if (!(q >= t.lo[k] && q <= t.hi[k])) return false;
+  }
+  return true;
+}
+
+// tri_axes_meet's 10 non-box axes on 8 boxes at once (centres o + (x[k], y[k], z[k])): bit k set
+// when none separates box k. The same float operations lane by lane as tri_axes_meet (the edge
+// axes' zero components left out: each adds a signed zero, which changes no comparison). The box
+// axes are the caller's (the same expressions per axis). Always inlined, as tri_box_overlap8.
+__attribute__((always_inline)) inline uint32_t tri_boxes_meet8(const TriAxes& t, const float* x,
+                                                               const float* y, const float* z) {
+  F8 X, Y, Z;
+  __builtin_memcpy(&X, x, sizeof X);
+  __builtin_memcpy(&Y, y, sizeof Y);
+  __builtin_memcpy(&Z, z, sizeof Z);
+  I8 ok;
+  {
+    const F8 q = t.ax[0][0] * X + t.ax[0][1] * Y + t.ax[0][2] * Z;
+    ok = (q >= t.lo[0]) & (q <= t.hi[0]);
+  }
+  for (int i = 0; i < 3; ++i) {
+    const int k = 1 + 3 * i;
+    const F8 q0 = t.ax[k][1] * Y + t.ax[k][2] * Z;
+    const F8 q1 = t.ax[k + 1][0] * X + t.ax[k + 1][2] * Z;
+    const F8 q2 = t.ax[k + 2][0] * X + t.ax[k + 2][1] * Y;
+    ok &= (q0 >= t.lo[k]) & (q0 <= t.hi[k]) & (q1 >= t.lo[k + 1]) & (q1 <= t.hi[k + 1]) &
+          (q2 >= t.lo[k + 2]) & (q2 <= t.hi[k + 2]);
+  }
+  const I8 lane_bit = {1, 2, 4, 8, 16, 32, 64, 128};
+  I8 m = ok & lane_bit;
+#if defined(__clang__)
+  m |= __builtin_shufflevector(m, m, 4, 5, 6, 7, 0, 1, 2, 3);
+  m |= __builtin_shufflevector(m, m, 2, 3, 0, 1, 6, 7, 4, 5);
+  m |= __builtin_shufflevector(m, m, 1, 0, 3, 2, 5, 4, 7, 6);
+#else
+  const I8 halves = {4, 5, 6, 7, 0, 1, 2, 3}, pairs = {2, 3, 0, 1, 6, 7, 4, 5},
+           ones = {1, 0, 3, 2, 5, 4, 7, 6};
+  m |= __builtin_shuffle(m, halves);
+  m |= __builtin_shuffle(m, pairs);
+  m |= __builtin_shuffle(m, ones);
+#endif
+  return uint32_t(m[0]);
+}
+
 // Closest point to p on triangle abc, by which Voronoi region of the triangle p projects into
 // (vertex, edge or face; Ericson, Real-Time Collision Detection, 5.1.5).
 inline V3 closest_on_triangle(V3 p, V3 a, V3 b, V3 c) {

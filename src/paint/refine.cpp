@@ -108,6 +108,119 @@ const bool kAvx2 = __builtin_cpu_supports("avx2");
 
 }  // namespace
 
+namespace {
+
+// Per axis, the leaves of a brick (bit 8 * c1 + c2: leaf c2 of child c1) whose index along the
+// axis (0-3) is in a 4-bit mask: kReach[axis][mask].
+constexpr std::array<std::array<uint64_t, 16>, 3> kReach = [] {
+  std::array<std::array<uint64_t, 16>, 3> r{};
+  for (int a = 0; a < 3; ++a)
+    for (int mask = 0; mask < 16; ++mask)
+      for (int m = 0; m < 64; ++m) {
+        const int i = (m >> (3 + a) & 1) * 2 + (m >> a & 1);
+        if (mask >> i & 1) r[size_t(a)][size_t(mask)] |= uint64_t(1) << m;
+      }
+  return r;
+}();
+
+// Refiner::leaf_masks's loop. off[a][i]: the offset from the brick's centre of the centres of
+// its leaves of index i along axis a; lanes[a][m]: the same per leaf, set for the leaves of want.
+__attribute__((always_inline)) inline void leaf_masks_loop(
+    const PaintSurface& s, std::span<const uint32_t> in, V3 o, const float (&off)[3][4],
+    const float (&lanes)[3][64], float h, float slack, uint64_t want, uint64_t* masks) {
+  using F4 = float __attribute__((vector_size(16)));
+  using I4 = int32_t __attribute__((vector_size(16)));
+  const float e = h + slack;
+  F4 offv[3];
+  for (int a = 0; a < 3; ++a) __builtin_memcpy(&offv[a], off[a], sizeof(F4));
+  const I4 bit = {1, 2, 4, 8};
+  for (size_t i = 0; i < in.size(); ++i) {
+    const uint32_t t = in[i];
+    TriAxes ta;
+    V3 v[3];
+    tri_axes_bounds(o, v3(s.corner(t, 0)), v3(s.corner(t, 1)), v3(s.corner(t, 2)), v, ta);
+    // The box axes, per axis: tri_axes_meet's expressions on the 4 leaf indices at once.
+    uint64_t reach = want;
+    for (int a = 0; a < 3; ++a) {
+      const I4 hit = ~(ta.mn[a] - offv[a] > e) & ~(ta.mx[a] - offv[a] < -e) & bit;
+      reach &= kReach[size_t(a)][uint32_t(hit[0] | hit[1] | hit[2] | hit[3])];
+    }
+    uint64_t m = 0;
+    if (reach) {
+      tri_axes_rest(h, slack, v, ta);
+      for (uint64_t left = reach; left;) {
+        const int g = std::countr_zero(left) >> 3;
+        const uint64_t byte = reach >> (8 * g) & 255u;
+        m |= uint64_t(tri_boxes_meet8(ta, lanes[0] + 8 * g, lanes[1] + 8 * g, lanes[2] + 8 * g) &
+                      byte)
+             << (8 * g);
+        left &= ~(uint64_t(255) << (8 * g));
+      }
+    }
+    masks[i] = m;
+  }
+}
+
+__attribute__((target("avx2"))) void leaf_masks_avx2(const PaintSurface& s,
+                                                     std::span<const uint32_t> in, V3 o,
+                                                     const float (&off)[3][4],
+                                                     const float (&lanes)[3][64], float h,
+                                                     float slack, uint64_t want, uint64_t* masks) {
+  leaf_masks_loop(s, in, o, off, lanes, h, slack, want, masks);
+}
+
+void leaf_masks_generic(const PaintSurface& s, std::span<const uint32_t> in, V3 o,
+                        const float (&off)[3][4], const float (&lanes)[3][64], float h, float slack,
+                        uint64_t want, uint64_t* masks) {
+  leaf_masks_loop(s, in, o, off, lanes, h, slack, want, masks);
+}
+
+}  // namespace
+
+void Refiner::leaf_masks(std::span<const uint32_t> in, const CellBox& bb, const BrickLeaves& l,
+                         uint64_t want, std::vector<uint64_t>& masks) const {
+  masks.resize(in.size());
+  // The leaves' centres as offsets from the brick's centre.
+  const float c[3] = {bb.c.x, bb.c.y, bb.c.z};
+  float off[3][4], lanes[3][64];
+  for (int a = 0; a < 3; ++a)
+    for (int k = 0; k < 4; ++k) off[a][k] = l.c[a][k] - c[a];
+  for (uint32_t g = 0; g < 8; ++g) {
+    if (!(want >> (8 * g) & 255u)) continue;
+    for (int a = 0; a < 3; ++a) {
+      const float lo = off[a][(g >> a & 1) * 2], hi = off[a][(g >> a & 1) * 2 + 1];
+      for (int c2 = 0; c2 < 8; ++c2) lanes[a][8 * g + uint32_t(c2)] = (c2 >> a & 1) ? hi : lo;
+    }
+  }
+  if (kAvx2)
+    leaf_masks_avx2(s_, in, bb.c, off, lanes, l.h, slack_, want, masks.data());
+  else
+    leaf_masks_generic(s_, in, bb.c, off, lanes, l.h, slack_, want, masks.data());
+}
+
+uint64_t Refiner::meeting_leaves(const CellBox& bb, const BrickLeaves& l) const {
+  if (region_.everything) return ~uint64_t(0);
+  CellBox k1[8];
+  children(bb, k1);
+  const uint32_t want1 = meeting(k1);
+  // meets()'s terms per axis and leaf index.
+  const float rc[3] = {region_.c.x, region_.c.y, region_.c.z};
+  float dd[3][4];
+  for (int a = 0; a < 3; ++a)
+    for (int k = 0; k < 4; ++k) {
+      const float d = std::max(std::fabs(rc[a] - l.c[a][k]) - l.h, 0.0f);
+      dd[a][k] = d * d;
+    }
+  const float r2 = region_.r * region_.r;
+  uint64_t want = 0;
+  for (int m = 0; m < 64; ++m)
+    if (want1 >> (m >> 3) & 1)
+      want |= uint64_t(
+                  dd[0][leaf_index(m, 0)] + dd[1][leaf_index(m, 1)] + dd[2][leaf_index(m, 2)] <= r2)
+              << m;
+  return want;
+}
+
 uint32_t Refiner::meeting(const CellBox kids[8]) const {
   if (region_.everything) return 0xffu;
   uint32_t m = 0;
@@ -341,16 +454,10 @@ void Refiner::store_general(Ctx& w, const GeneralNode& n, uint32_t old_ptr, uint
       put_block(w, old_ptr, old_n, false, popc(octree::generals(info)), popc(octree::bricks(info)));
 }
 
-uint32_t Refiner::store_brick(Ctx& w, const Brick& b, uint32_t old_word) {
+uint32_t Refiner::store_brick(Ctx& w, const Brick& b, uint32_t old_word, const Brick* old) {
   const uint32_t flag = encode_brick(b, w.words);
-  uint32_t old_ptr = 0, old_n = 0;
-  if (old_word) {
-    old_ptr = old_word & ~octree::kBrickDoubleFlag;
-    uint32_t at = 0;
-    const std::span<const uint32_t> words = block(w, old_ptr, at);
-    const Brick old = decode_brick(words, at | (old_word & octree::kBrickDoubleFlag));
-    old_n = brick_block_words(old.mask, old.dbl);
-  }
+  const uint32_t old_ptr = old_word & ~octree::kBrickDoubleFlag;
+  const uint32_t old_n = old ? brick_block_words(old->mask, old->dbl) : 0;
   return put_block(w, old_ptr, old_n, true, 0, 0) | flag;
 }
 
@@ -416,44 +523,55 @@ bool Refiner::build_brick(Ctx& w, const CellBox& cb, const LeafCell& leaf,
                           std::span<const uint32_t> full, std::span<const uint32_t> tris,
                           Brick& b) {
   b = Brick{};
-  Split &p1 = w.brick1, &p2 = w.brick2;
-  CellBox k1[8], k2[8];
-  children(cb, k1);
-  split(full, cb, k1, p1);
-  // tris is a subset of full (both sorted): equal when as long. A sub-cell's region list is its
-  // full list less the triangles outside tris: the same triangles, tested against the same
-  // boxes, that splitting tris again would keep.
-  const bool same = tris.size() == full.size();
-  const bool inside = within(cb);
-  for (int c1 = 0; c1 < 8; ++c1) {
-    if (p1[size_t(c1)].empty()) continue;
-    const CellBox& b1 = k1[c1];
-    children(b1, k2);
-    split(p1[size_t(c1)], b1, k2, p2);
-    for (int c2 = 0; c2 < 8; ++c2) {
-      const std::vector<uint32_t>& f2 = p2[size_t(c2)];
-      if (f2.empty()) continue;
-      const int m = 8 * c1 + c2;
-      b.mask |= uint64_t(1) << m;
-      b.cell[m] = make_leaf(f2, &leaf);
-      ++w.stats.leaves_created;
-    }
-    if (!inside && !meets(b1)) continue;
-    for (int c2 = 0; c2 < 8; ++c2) {
-      const std::vector<uint32_t>& f2 = p2[size_t(c2)];
-      if (f2.empty()) continue;
-      if (!same) intersect_sorted(f2, tris, w.sub);
-      const std::vector<uint32_t>& t2 = same ? f2 : w.sub;
-      const CellBox& b2 = k2[c2];
-      if (t2.empty() || !(inside || meets(b2))) continue;
-      if (w.painter)
-        w.painter->paint(b2, b.cell[8 * c1 + c2], t2, LeafPainter::kNoMemo),
-            ++w.stats.leaves_painted;
-    }
+  std::vector<uint64_t>& masks = w.masks;
+  const BrickLeaves l = brick_leaves(cb);
+  leaf_masks(full, cb, l, ~uint64_t(0), masks);
+  uint64_t any = 0;
+  for (uint64_t m : masks) any |= m;
+  // Each leaf's first triangle and first on side 1 of that one's tag: what make_leaf reads.
+  for (uint64_t left = any; left; left &= left - 1) {
+    const int m = std::countr_zero(left);
+    size_t i = 0;
+    while (!(masks[i] >> m & 1)) ++i;
+    const uint32_t first = full[i];
+    const int tag = s_.tag(first);
+    uint32_t back = ~0u;
+    for (size_t j = i + 1; j < full.size(); ++j)
+      if ((masks[j] >> m & 1) && s_.side(tag, full[j]) == 1) {
+        back = full[j];
+        break;
+      }
+    b.cell[m] = leaf_of(first, back, &leaf);
+    ++w.stats.leaves_created;
   }
+  b.mask = any;
   ++w.stats.bricks_created;  // counted as before, even when no sub-cell meets the surface
   if (b.mask == 0) return false;
-  if (w.painter) w.painter->flush();
+  if (w.painter) {
+    // tris is a subset of full (both sorted): a leaf's region list is its full list less the
+    // triangles outside tris.
+    const bool same = tris.size() == full.size();
+    std::vector<uint8_t>& in = w.in_region;
+    if (!same) {
+      in.assign(full.size(), 0);
+      size_t j = 0;
+      for (size_t i = 0; i < full.size() && j < tris.size(); ++i) {
+        while (j < tris.size() && tris[j] < full[i]) ++j;
+        if (j < tris.size() && tris[j] == full[i]) in[i] = 1;
+      }
+    }
+    const uint64_t want = within(cb) ? ~uint64_t(0) : meeting_leaves(cb, l);
+    for (uint64_t left = any & want; left; left &= left - 1) {
+      const int m = std::countr_zero(left);
+      w.sub.clear();
+      for (size_t i = 0; i < full.size(); ++i)
+        if ((masks[i] >> m & 1) && (same || in[i])) w.sub.push_back(full[i]);
+      if (w.sub.empty()) continue;
+      w.painter->paint(leaf_box(l, m), b.cell[m], w.sub, LeafPainter::kNoMemo),
+          ++w.stats.leaves_painted;
+    }
+    w.painter->flush();
+  }
   b.avg = brick_avg(b);
   return true;
 }
@@ -515,20 +633,13 @@ bool same_cells(const Brick& a, const Brick& b) {
 }  // namespace
 
 void Refiner::visit_brick(Ctx& w, Brick& b, const CellBox& bb, std::span<const uint32_t> tris) {
-  Split &p1 = w.brick1, &p2 = w.brick2;
-  // Only children meeting the region are visited: only they are split.
-  CellBox k1[8], k2[8][8];
-  children(bb, k1);
-  // Most bricks of a dab lie inside its ball: then all their cells meet it.
-  const bool inside = within(bb);
-  const uint32_t want1 = inside ? 0xffu : meeting(k1);
-  uint32_t want2[8] = {};
-  for (int c1 = 0; c1 < 8; ++c1)
-    if (want1 >> c1 & 1) children(k1[c1], k2[c1]), want2[c1] = inside ? 0xffu : meeting(k2[c1]);
+  // Only leaves meeting the region are visited: only they are tested. Most bricks of a dab lie
+  // inside its ball: then all their cells meet it.
+  const BrickLeaves l = brick_leaves(bb);
+  const uint64_t want = within(bb) ? ~uint64_t(0) : meeting_leaves(bb, l);
   KeptBrick* kept = nullptr;
   uint32_t memo0 = LeafPainter::kNoMemo;  // memo of leaf m: memo0 + m
-  auto visit_leaf = [&](int c1, int c2, std::span<const uint32_t> t2) {
-    const int m = 8 * c1 + c2;
+  auto visit_leaf = [&](int m, std::span<const uint32_t> t2) {
     if (!(b.mask >> m & 1)) {
       // A surface cell the brick lacks: the texture was made for another mesh.
       b.mask |= uint64_t(1) << m;
@@ -536,11 +647,9 @@ void Refiner::visit_brick(Ctx& w, Brick& b, const CellBox& bb, std::span<const u
       ++w.stats.leaves_created;
     }
     const uint32_t memo = memo0 == LeafPainter::kNoMemo ? memo0 : memo0 + uint32_t(m);
-    if (w.painter) w.painter->paint(k2[c1][c2], b.cell[m], t2, memo), ++w.stats.leaves_painted;
+    if (w.painter) w.painter->paint(leaf_box(l, m), b.cell[m], t2, memo), ++w.stats.leaves_painted;
   };
-  uint64_t want = 0;
   if (keep_) {
-    for (int c1 = 0; c1 < 8; ++c1) want |= uint64_t(want2[c1]) << (8 * c1);
     const uint64_t key = morton3(bb.x, bb.y, bb.z) | uint64_t(bb.level) << 48;
     Kept& k = *w.kept;
     const auto [it, added] = k.index.try_emplace(key, uint32_t(k.bricks.size()));
@@ -548,36 +657,37 @@ void Refiner::visit_brick(Ctx& w, Brick& b, const CellBox& bb, std::span<const u
     kept = &k.bricks[it->second];
     if (it->second < (1u << 25)) memo0 = 64 * it->second;
     if (!(want & ~kept->known)) {
-      // Every leaf wanted has its list from an earlier run: the same visits, no split.
+      // Every leaf wanted has its list from an earlier run: the same visits, no tests.
       for (uint64_t left = want; left; left &= left - 1) {
         const int m = std::countr_zero(left);
         if (kept->len[m])
-          visit_leaf(m >> 3, m & 7,
+          visit_leaf(m,
                      std::span<const uint32_t>(w.kept->tris.data() + kept->off[m], kept->len[m]));
       }
       if (w.painter) w.painter->flush();
       return;
     }
   }
-  split(tris, bb, k1, p1, want1);
-  for (int c1 = 0; c1 < 8; ++c1) {
-    if (!(want1 >> c1 & 1)) continue;
-    const bool any = !p1[size_t(c1)].empty();
-    if (any) split(p1[size_t(c1)], k1[c1], k2[c1], p2, want2[c1]);
-    for (int c2 = 0; c2 < 8; ++c2) {
-      if (!(want2[c1] >> c2 & 1)) continue;
-      const int m = 8 * c1 + c2;
-      if (kept) {
-        std::vector<uint32_t>& kt = w.kept->tris;
-        kept->off[m] = uint32_t(kt.size());
-        kept->len[m] = any ? uint32_t(p2[size_t(c2)].size()) : 0;
-        if (any) kt.insert(kt.end(), p2[size_t(c2)].begin(), p2[size_t(c2)].end());
-      }
-      if (!any || p2[size_t(c2)].empty()) continue;
-      visit_leaf(c1, c2, p2[size_t(c2)]);
-    }
+  std::vector<uint64_t>& masks = w.masks;
+  leaf_masks(tris, bb, l, want, masks);
+  uint64_t any = 0;
+  for (uint64_t m : masks) any |= m;
+  if (kept) {
+    for (uint64_t left = want & ~any; left; left &= left - 1) kept->len[std::countr_zero(left)] = 0;
+    kept->known |= want;
   }
-  if (kept) kept->known |= want;
+  for (uint64_t left = any; left; left &= left - 1) {
+    const int m = std::countr_zero(left);
+    w.sub.clear();
+    for (size_t i = 0; i < tris.size(); ++i)
+      if (masks[i] >> m & 1) w.sub.push_back(tris[i]);
+    if (kept) {
+      std::vector<uint32_t>& kt = w.kept->tris;
+      kept->off[m] = uint32_t(kt.size()), kept->len[m] = uint32_t(w.sub.size());
+      kt.insert(kt.end(), w.sub.begin(), w.sub.end());
+    }
+    visit_leaf(m, w.sub);
+  }
   if (w.painter) w.painter->flush();
 }
 
@@ -773,7 +883,7 @@ void Refiner::visit_child(Ctx& w, GeneralNode& n, int c, const CellBox& cb,
         Brick b;
         if (!build_brick(w, cb, n.leaf[c], full, tc, b)) break;
         n.kind[c] = CellKind::brick;
-        n.ptr[c] = store_brick(w, b, 0);
+        n.ptr[c] = store_brick(w, b, 0, nullptr);
       } else {
         GeneralNode g = refine_leaf(w, cb, n.leaf[c], queried ? nullptr : &full);
         bool any = false;
@@ -798,7 +908,7 @@ void Refiner::visit_child(Ctx& w, GeneralNode& n, int c, const CellBox& cb,
             release(w, g.ptr[k], general_block_words(g.info[k]), false);
         release(w, n.ptr[c], general_block_words(n.info[c]), false);
         n.kind[c] = CellKind::brick;
-        n.ptr[c] = store_brick(w, b, 0);
+        n.ptr[c] = store_brick(w, b, 0, nullptr);
         ++w.stats.bricks_compacted;
       } else {
         store_general(w, g, n.ptr[c], n.info[c], n.ptr[c], n.info[c]);
@@ -824,7 +934,7 @@ void Refiner::visit_child(Ctx& w, GeneralNode& n, int c, const CellBox& cb,
         visit_brick(w, b, cb, tc);
         if (!same_cells(before, b)) {
           b.avg = brick_avg(b);
-          n.ptr[c] = store_brick(w, b, n.ptr[c]);
+          n.ptr[c] = store_brick(w, b, n.ptr[c], &before);
         }
       }
       break;

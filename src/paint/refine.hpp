@@ -131,6 +131,45 @@ class Refiner {
   /// The same with b's children already at hand (`kids`, as children() gives them).
   void split(std::span<const uint32_t> in, const CellBox& b, const CellBox kids[8], Split& out,
              uint32_t want = 0xffu) const;
+  /// A brick's two levels at once: masks[i], the leaves (bit 8 * c1 + c2: leaf c2 of child c1,
+  /// Brick's numbering) among `want` that in[i] meets, for the brick cell `bb` (level depth - 2).
+  /// Each leaf is tested once, from the triangle's axes taken from the brick's centre
+  /// (TriAxes): the lists of a brick's leaves are the same whichever list of the brick's
+  /// triangles they come from.
+  void leaf_masks(std::span<const uint32_t> in, const CellBox& bb, uint64_t want,
+                  std::vector<uint64_t>& masks) const {
+    leaf_masks(in, bb, brick_leaves(bb), want, masks);
+  }
+  /// A brick's leaves (cells two levels below a cell): per axis the centres of the 4 leaves
+  /// along it, as box() computes them; leaf m (8 * c1 + c2) has index (c1 >> a & 1) * 2 +
+  /// (c2 >> a & 1) along axis a.
+  struct BrickLeaves {
+    float c[3][4];
+    float h;
+    int level;
+    uint32_t base[3];
+  };
+  BrickLeaves brick_leaves(const CellBox& bb) const {
+    BrickLeaves l;
+    l.level = bb.level + 2;
+    const double s = cell_size(l.level);
+    l.base[0] = 4 * bb.x, l.base[1] = 4 * bb.y, l.base[2] = 4 * bb.z;
+    for (int a = 0; a < 3; ++a)
+      for (uint32_t k = 0; k < 4; ++k) l.c[a][k] = centre(a, l.base[a] + k, s);
+    l.h = float(0.5 * s);
+    return l;
+  }
+  static int leaf_index(int m, int a) { return (m >> (3 + a) & 1) * 2 + (m >> a & 1); }
+  /// The box of leaf m: what child(child(bb, m >> 3), m & 7) gives.
+  static CellBox leaf_box(const BrickLeaves& l, int m) {
+    CellBox b;
+    const int i = leaf_index(m, 0), j = leaf_index(m, 1), k = leaf_index(m, 2);
+    b.level = l.level, b.x = l.base[0] + uint32_t(i), b.y = l.base[1] + uint32_t(j),
+    b.z = l.base[2] + uint32_t(k);
+    b.c = {l.c[0][i], l.c[1][j], l.c[2][k]};
+    b.h = l.h;
+    return b;
+  }
   /// Whether split(tris, nb, kids, out, want) would give every triangle of a list whose
   /// corners' bounds are `box` to one child, keeping all of them: then `only` is that child
   /// (-1: one not in want, every list empty). Decided from the bounds alone (the split's
@@ -239,8 +278,9 @@ class Refiner {
   /// log of the task.
   struct Ctx {
     std::array<Scratch, octree::kMaxDepth + 1> scratch;
-    Split brick1, brick2;       // a brick's two levels
-    std::vector<uint32_t> sub;  // one sub-cell's region list
+    std::vector<uint64_t> masks;     // a brick's list's leaf masks (leaf_masks)
+    std::vector<uint8_t> in_region;  // per triangle of a new brick's full list
+    std::vector<uint32_t> sub;       // one leaf's list
     std::vector<uint32_t> words;
     RefineStats stats;
     LeafPainter* painter = nullptr;
@@ -268,6 +308,11 @@ class Refiner {
   bool within(const CellBox& b) const;
   /// Which of b's children (`kids`) meet the region (bit c: child c).
   uint32_t meeting(const CellBox kids[8]) const;
+  /// Which leaves of the brick `bb` (bit m, leaf_box(l, m)) meet the region and lie in a
+  /// child of bb that does: meets() on each, from per-axis terms (the same float operations).
+  uint64_t meeting_leaves(const CellBox& bb, const BrickLeaves& l) const;
+  void leaf_masks(std::span<const uint32_t> in, const CellBox& bb, const BrickLeaves& l,
+                  uint64_t want, std::vector<uint64_t>& masks) const;
   void full_tris(const CellBox& b, std::span<const uint32_t> region_tris,
                  std::vector<uint32_t>& out) const;
   /// `full` (may be null): every triangle meeting the node's box, when known (a node just made
@@ -328,7 +373,9 @@ class Refiner {
   /// Encodes and stores a node; returns (ptr, info). `old_ptr` 0: new.
   void store_general(Ctx& w, const GeneralNode& n, uint32_t old_ptr, uint32_t old_info,
                      uint32_t& ptr, uint32_t& info);
-  uint32_t store_brick(Ctx& w, const Brick& b, uint32_t old_word);
+  /// Encodes and stores a brick in place of `old_word`'s block (0: new), `old` its cells as
+  /// decoded (their size; null with old_word 0); returns the brick's word.
+  uint32_t store_brick(Ctx& w, const Brick& b, uint32_t old_word, const Brick* old);
   /// ed_.replace_block, or its record in w's log (a temporary address).
   uint32_t put_block(Ctx& w, uint32_t old_ptr, uint32_t old_n, bool brick, int generals,
                      int bricks);

@@ -72,6 +72,118 @@ TEST(PaintGeometry, EightBoxTestEqualsTheScalarTest) {
   EXPECT_GT(inside, total / 100);
 }
 
+// The brick's leaf test (TriAxes from the brick's centre) against clipping the triangle to the
+// box in double precision: a triangle meeting the box grown by the slack less the rounding of
+// the float offsets is always found, and one missing the box grown by the slack plus that
+// rounding never is. Boxes from 1/8 to 1/16384 of a unit cube, triangles from h/8 to 16 h
+// around them, a quarter with a corner snapped onto a face (the cases rounding decides).
+TEST(PaintGeometry, TriangleAxesTestIsTheBoxTestUpToRounding) {
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<float> u(-1, 1), pos(0, 1);
+  const float slack = std::ldexp(1.0f, -22);
+  size_t met = 0, total = 0, decided = 0;
+  for (int iter = 0; iter < 200000; ++iter) {
+    const float h = std::ldexp(1.0f, -3 - int(rng() % 12));
+    const V3 o = {pos(rng), pos(rng), pos(rng)};  // the brick's centre
+    // A leaf of the brick: offsets (i - 1.5) 2h.
+    const float off[3] = {(float(rng() % 4) - 1.5f) * 2 * h, (float(rng() % 4) - 1.5f) * 2 * h,
+                          (float(rng() % 4) - 1.5f) * 2 * h};
+    const V3 c = {o.x + off[0], o.y + off[1], o.z + off[2]};
+    const float size = h * std::ldexp(1.0f, int(rng() % 8) - 3);
+    V3 p[3];
+    for (V3& v : p) v = {c.x + size * u(rng) * 2, c.y + size * u(rng) * 2, c.z + size * u(rng) * 2};
+    if (iter % 4 == 0) {
+      const int axis = int(rng() % 3);
+      const float face = (axis == 0 ? c.x : axis == 1 ? c.y : c.z) + (rng() % 2 ? h : -h);
+      float* coord = axis == 0 ? &p[0].x : axis == 1 ? &p[0].y : &p[0].z;
+      *coord = face + slack * u(rng);
+    }
+    paint_detail::TriAxes ta;
+    paint_detail::tri_axes(o, h, slack, p[0], p[1], p[2], ta);
+    const bool got = paint_detail::tri_axes_meet(ta, h, slack, off[0], off[1], off[2]);
+    // The oracle, in double, on the box as the offsets place it.
+    test::Tri t;
+    t.a = {p[0].x, p[0].y, p[0].z}, t.b = {p[1].x, p[1].y, p[1].z}, t.c = {p[2].x, p[2].y, p[2].z};
+    const test::P3 lo = {double(o.x) + off[0] - h, double(o.y) + off[1] - h,
+                         double(o.z) + off[2] - h},
+                   hi = {double(o.x) + off[0] + h, double(o.y) + off[1] + h,
+                         double(o.z) + off[2] + h};
+    double scale = 0;
+    for (const V3& v : p)
+      scale = std::max({scale, std::fabs(double(v.x) - o.x), std::fabs(double(v.y) - o.y),
+                        std::fabs(double(v.z) - o.z)});
+    scale = std::max({scale, double(std::fabs(off[0])) + h, double(std::fabs(off[1])) + h,
+                      double(std::fabs(off[2])) + h});
+    const double tol = std::ldexp(scale, -19);
+    if (test::tri_meets_box(t, lo, hi, slack - tol)) {
+      ASSERT_TRUE(got) << "iteration " << iter;
+      ++decided;
+    } else if (!test::tri_meets_box(t, lo, hi, slack + tol)) {
+      ASSERT_FALSE(got) << "iteration " << iter;
+      ++decided;
+    }
+    met += got, ++total;
+  }
+  EXPECT_GT(met, total / 10);
+  EXPECT_LT(met, total * 9 / 10);
+  EXPECT_GT(decided, total * 9 / 10);
+}
+
+// A brick's leaf masks (its two levels tested at once, 8 leaves per step) against testing each
+// wanted leaf alone with the scalar form: the same bits, for bricks at every level of a sphere
+// with two sheets through it, whole or with random wanted leaves.
+TEST(PaintGeometry, LeafMasksEqualTestingEachLeaf) {
+  const Mesh m =
+      test::merge({test::uv_sphere(1.0, 30, 60), test::sheet(-1.2, -0.2, -0.6, 0.6, 0.0, 25, true),
+                   test::sheet(-1.2, -0.2, -0.6, 0.6, 0.002, 25, false)});
+  const PaintSurface s(m);
+  OctreeTexture tex = OctreeTexture::create(s);
+  const detail::Refiner r(tex, s);
+  std::mt19937 rng(5);
+  size_t bits = 0, tested = 0;
+  std::vector<uint64_t> masks;
+  for (int iter = 0; iter < 1500; ++iter) {
+    const int level = 1 + int(rng() % 10);
+    const uint32_t tri = uint32_t(rng() % s.triangle_count());
+    const uint32_t n = 1u << level;
+    uint32_t xyz[3];
+    for (int k = 0; k < 3; ++k) {
+      const float cell =
+          std::floor((s.corner(tri, 0)[k] - tex.origin()[k]) / tex.size() * float(n));
+      xyz[k] = uint32_t(std::clamp(cell, 0.0f, float(n - 1)));
+    }
+    const detail::CellBox bb = r.box(level, xyz[0], xyz[1], xyz[2]);
+    std::vector<uint32_t> list;
+    const float c[3] = {bb.c.x, bb.c.y, bb.c.z};
+    s.triangles_in_box(c, bb.h, r.slack(), list);
+    const uint64_t want = iter % 2 ? ~uint64_t(0) : (uint64_t(rng()) << 32 | rng());
+    r.leaf_masks(list, bb, want, masks);
+    ASSERT_EQ(masks.size(), list.size());
+    const detail::Refiner::BrickLeaves l = r.brick_leaves(bb);
+    for (size_t i = 0; i < list.size(); ++i) {
+      paint_detail::TriAxes ta;
+      paint_detail::tri_axes(bb.c, l.h, r.slack(), paint_detail::v3(s.corner(list[i], 0)),
+                             paint_detail::v3(s.corner(list[i], 1)),
+                             paint_detail::v3(s.corner(list[i], 2)), ta);
+      for (int leaf = 0; leaf < 64; ++leaf) {
+        const detail::CellBox lb = detail::Refiner::leaf_box(l, leaf);
+        ASSERT_EQ(lb.c.x, r.child(r.child(bb, leaf >> 3), leaf & 7).c.x);
+        ASSERT_EQ(lb.c.y, r.child(r.child(bb, leaf >> 3), leaf & 7).c.y);
+        ASSERT_EQ(lb.c.z, r.child(r.child(bb, leaf >> 3), leaf & 7).c.z);
+        const bool expect =
+            (want >> leaf & 1) && paint_detail::tri_axes_meet(ta, l.h, r.slack(), lb.c.x - bb.c.x,
+                                                              lb.c.y - bb.c.y, lb.c.z - bb.c.z);
+        ASSERT_EQ(bool(masks[i] >> leaf & 1), expect)
+            << "iteration " << iter << " level " << level << " triangle " << list[i] << " leaf "
+            << leaf;
+        bits += expect, ++tested;
+      }
+    }
+  }
+  EXPECT_GT(bits, tested / 100);  // leaves met, and many not
+  EXPECT_LT(bits, tested / 2);
+}
+
 // The paint layer rounds colours to bytes without calling lround (dabs and means round
 // thousands of values): every float of [0, 1] in steps of 2^-20, every tie (k + 0.5) / 255 and
 // its neighbours, and doubles in [0, 255] must round as clamp(lround(255 v)) and clamp(lround(v))
