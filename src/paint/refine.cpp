@@ -519,6 +519,22 @@ void intersect_sorted(std::span<const uint32_t> a, std::span<const uint32_t> b,
 
 }  // namespace
 
+void Refiner::leaf_lists(std::span<const uint32_t> in, std::span<const uint64_t> masks,
+                         LeafLists& out) {
+  // Counted, then placed: each leaf's triangles in list order, one pass over the bits each.
+  uint32_t n[64] = {};
+  for (uint64_t m : masks)
+    for (; m; m &= m - 1) ++n[std::countr_zero(m)];
+  uint32_t at = 0;
+  for (int k = 0; k < 64; ++k) out.start[k] = at, at += n[k];
+  out.start[64] = at;
+  out.tris.resize(at);
+  uint32_t pos[64];
+  std::copy_n(out.start, 64, pos);
+  for (size_t i = 0; i < in.size(); ++i)
+    for (uint64_t m = masks[i]; m; m &= m - 1) out.tris[pos[std::countr_zero(m)]++] = in[i];
+}
+
 bool Refiner::build_brick(Ctx& w, const CellBox& cb, const LeafCell& leaf,
                           std::span<const uint32_t> full, std::span<const uint32_t> tris,
                           Brick& b) {
@@ -526,22 +542,23 @@ bool Refiner::build_brick(Ctx& w, const CellBox& cb, const LeafCell& leaf,
   std::vector<uint64_t>& masks = w.masks;
   const BrickLeaves l = brick_leaves(cb);
   leaf_masks(full, cb, l, ~uint64_t(0), masks);
-  uint64_t any = 0;
-  for (uint64_t m : masks) any |= m;
-  // Each leaf's first triangle and first on side 1 of that one's tag: what make_leaf reads.
+  // Each leaf's first triangle and first on side 1 of that one's tag: what make_leaf reads of
+  // its list, found in one pass over the list.
+  uint32_t first[64], back[64];
+  uint64_t any = 0, open = 0;  // open: leaves with a first triangle and no back one yet
+  for (size_t i = 0; i < full.size(); ++i) {
+    const uint32_t t = full[i];
+    const uint64_t fresh = masks[i] & ~any;
+    for (uint64_t m = fresh; m; m &= m - 1) first[std::countr_zero(m)] = t;
+    for (uint64_t m = masks[i] & open; m; m &= m - 1) {
+      const int k = std::countr_zero(m);
+      if (s_.side(s_.tag(first[k]), t) == 1) back[k] = t, open &= ~(uint64_t(1) << k);
+    }
+    any |= fresh, open |= fresh;
+  }
   for (uint64_t left = any; left; left &= left - 1) {
     const int m = std::countr_zero(left);
-    size_t i = 0;
-    while (!(masks[i] >> m & 1)) ++i;
-    const uint32_t first = full[i];
-    const int tag = s_.tag(first);
-    uint32_t back = ~0u;
-    for (size_t j = i + 1; j < full.size(); ++j)
-      if ((masks[j] >> m & 1) && s_.side(tag, full[j]) == 1) {
-        back = full[j];
-        break;
-      }
-    b.cell[m] = leaf_of(first, back, &leaf);
+    b.cell[m] = leaf_of(first[m], open >> m & 1 ? ~0u : back[m], &leaf);
     ++w.stats.leaves_created;
   }
   b.mask = any;
@@ -550,24 +567,18 @@ bool Refiner::build_brick(Ctx& w, const CellBox& cb, const LeafCell& leaf,
   if (w.painter) {
     // tris is a subset of full (both sorted): a leaf's region list is its full list less the
     // triangles outside tris.
-    const bool same = tris.size() == full.size();
-    std::vector<uint8_t>& in = w.in_region;
-    if (!same) {
-      in.assign(full.size(), 0);
-      size_t j = 0;
-      for (size_t i = 0; i < full.size() && j < tris.size(); ++i) {
-        while (j < tris.size() && tris[j] < full[i]) ++j;
-        if (j < tris.size() && tris[j] == full[i]) in[i] = 1;
-      }
+    const uint64_t want = any & (within(cb) ? ~uint64_t(0) : meeting_leaves(cb, l));
+    size_t j = 0;
+    for (size_t i = 0; i < full.size(); ++i) {
+      while (j < tris.size() && tris[j] < full[i]) ++j;
+      masks[i] &= j < tris.size() && tris[j] == full[i] ? want : 0;
     }
-    const uint64_t want = within(cb) ? ~uint64_t(0) : meeting_leaves(cb, l);
-    for (uint64_t left = any & want; left; left &= left - 1) {
+    LeafLists& ll = w.lists;
+    leaf_lists(full, masks, ll);
+    for (uint64_t left = want; left; left &= left - 1) {
       const int m = std::countr_zero(left);
-      w.sub.clear();
-      for (size_t i = 0; i < full.size(); ++i)
-        if ((masks[i] >> m & 1) && (same || in[i])) w.sub.push_back(full[i]);
-      if (w.sub.empty()) continue;
-      w.painter->paint(leaf_box(l, m), b.cell[m], w.sub, LeafPainter::kNoMemo),
+      if (ll.start[m] == ll.start[m + 1]) continue;
+      w.painter->paint(leaf_box(l, m), b.cell[m], ll.list(m), LeafPainter::kNoMemo),
           ++w.stats.leaves_painted;
     }
     w.painter->flush();
@@ -676,17 +687,17 @@ void Refiner::visit_brick(Ctx& w, Brick& b, const CellBox& bb, std::span<const u
     for (uint64_t left = want & ~any; left; left &= left - 1) kept->len[std::countr_zero(left)] = 0;
     kept->known |= want;
   }
+  LeafLists& ll = w.lists;
+  leaf_lists(tris, masks, ll);
   for (uint64_t left = any; left; left &= left - 1) {
     const int m = std::countr_zero(left);
-    w.sub.clear();
-    for (size_t i = 0; i < tris.size(); ++i)
-      if (masks[i] >> m & 1) w.sub.push_back(tris[i]);
+    const std::span<const uint32_t> list = ll.list(m);
     if (kept) {
       std::vector<uint32_t>& kt = w.kept->tris;
-      kept->off[m] = uint32_t(kt.size()), kept->len[m] = uint32_t(w.sub.size());
-      kt.insert(kt.end(), w.sub.begin(), w.sub.end());
+      kept->off[m] = uint32_t(kt.size()), kept->len[m] = uint32_t(list.size());
+      kt.insert(kt.end(), list.begin(), list.end());
     }
-    visit_leaf(m, w.sub);
+    visit_leaf(m, list);
   }
   if (w.painter) w.painter->flush();
 }

@@ -268,6 +268,18 @@ class Refiner {
     const Log* log = nullptr;
     uint32_t op = 0;
   };
+  /// A brick's leaves' lists, one after another: leaf m's in tris[start[m], start[m + 1]).
+  struct LeafLists {
+    uint32_t start[65];
+    std::vector<uint32_t> tris;
+    std::span<const uint32_t> list(int m) const {
+      return std::span<const uint32_t>(tris).subspan(start[m], start[m + 1] - start[m]);
+    }
+  };
+  /// The lists of the leaves of a brick from leaf_masks' masks of `in`: leaf m's, the in[i]
+  /// with bit m of masks[i], in order.
+  static void leaf_lists(std::span<const uint32_t> in, std::span<const uint64_t> masks,
+                         LeafLists& out);
   /// Per node level, the lists a visit keeps while it recurses below.
   struct Scratch {
     std::vector<uint32_t> full;
@@ -278,9 +290,8 @@ class Refiner {
   /// log of the task.
   struct Ctx {
     std::array<Scratch, octree::kMaxDepth + 1> scratch;
-    std::vector<uint64_t> masks;     // a brick's list's leaf masks (leaf_masks)
-    std::vector<uint8_t> in_region;  // per triangle of a new brick's full list
-    std::vector<uint32_t> sub;       // one leaf's list
+    std::vector<uint64_t> masks;  // a brick's list's leaf masks (leaf_masks)
+    LeafLists lists;              // a brick's leaves' lists
     std::vector<uint32_t> words;
     RefineStats stats;
     LeafPainter* painter = nullptr;
