@@ -213,11 +213,17 @@ uint64_t Refiner::meeting_leaves(const CellBox& bb, const BrickLeaves& l) const 
     }
   const float r2 = region_.r * region_.r;
   uint64_t want = 0;
-  for (int m = 0; m < 64; ++m)
-    if (want1 >> (m >> 3) & 1)
-      want |= uint64_t(
-                  dd[0][leaf_index(m, 0)] + dd[1][leaf_index(m, 1)] + dd[2][leaf_index(m, 2)] <= r2)
-              << m;
+  for (uint32_t g = 0; g < 8; ++g) {
+    if (!(want1 >> g & 1)) continue;
+    // Leaf c2 of child g: index (g >> a & 1) * 2 + (c2 >> a & 1) along axis a.
+    const float* x = dd[0] + (g & 1) * 2;
+    const float* y = dd[1] + (g >> 1 & 1) * 2;
+    const float* z = dd[2] + (g >> 2 & 1) * 2;
+    uint32_t byte = 0;
+    for (uint32_t c2 = 0; c2 < 8; ++c2)
+      byte |= uint32_t(x[c2 & 1] + y[c2 >> 1 & 1] + z[c2 >> 2 & 1] <= r2) << c2;
+    want |= uint64_t(byte) << (8 * g);
+  }
   return want;
 }
 
