@@ -214,8 +214,8 @@ __attribute__((always_inline)) inline void tri_axes_rest(float h, float slack, c
     t.ax[0][0] = n.x, t.ax[0][1] = n.y, t.ax[0][2] = n.z;
     t.lo[0] = std::min({p0, p1, p2}) - r, t.hi[0] = std::max({p0, p1, p2}) + r;
   }
-  // Edge f x box axis: (0, -f.z, f.y), (f.z, 0, -f.x), (-f.y, f.x, 0); dot() of each with a
-  // corner, its zero term included (it adds a signed zero), as tri_axes_meet projects.
+  // Edge f x box axis: (0, -f.z, f.y), (f.z, 0, -f.x), (-f.y, f.x, 0); the zero terms left out
+  // (each adds a signed zero, which changes no comparison).
   for (int i = 0; i < 3; ++i) {
     const float fx = f[i].x, fy = f[i].y, fz = f[i].z;
     float* ax = t.ax[1 + 3 * i];
@@ -224,13 +224,12 @@ __attribute__((always_inline)) inline void tri_axes_rest(float h, float slack, c
     ax[6] = -fy, ax[7] = fx, ax[8] = 0;
     float p[3][3];
     for (int j = 0; j < 3; ++j) {
-      p[0][j] = 0 * v[j].x + -fz * v[j].y + fy * v[j].z;
-      p[1][j] = fz * v[j].x + 0 * v[j].y + -fx * v[j].z;
-      p[2][j] = -fy * v[j].x + fx * v[j].y + 0 * v[j].z;
+      p[0][j] = -fz * v[j].y + fy * v[j].z;
+      p[1][j] = fz * v[j].x + -fx * v[j].z;
+      p[2][j] = -fy * v[j].x + fx * v[j].y;
     }
-    const float r[3] = {e * (0.0f + std::fabs(fz) + std::fabs(fy)),
-                        e * (std::fabs(fz) + 0.0f + std::fabs(fx)),
-                        e * (std::fabs(fy) + std::fabs(fx) + 0.0f)};
+    const float r[3] = {e * (std::fabs(fz) + std::fabs(fy)), e * (std::fabs(fz) + std::fabs(fx)),
+                        e * (std::fabs(fy) + std::fabs(fx))};
     for (int k = 0; k < 3; ++k) {
       t.lo[1 + 3 * i + k] = std::min({p[k][0], p[k][1], p[k][2]}) - r[k];
       t.hi[1 + 3 * i + k] = std::max({p[k][0], p[k][1], p[k][2]}) + r[k];
