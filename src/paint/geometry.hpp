@@ -192,7 +192,8 @@ __attribute__((always_inline)) inline uint32_t tri_box_overlap8(const float* cx,
 // triangle within a few units of rounding of a box's grown face.
 struct TriAxes {
   float mn[3], mx[3];  // bounds of the corners' offsets from o
-  float ax[10][3], lo[10], hi[10];
+  // Axis k (0: the normal; 1 + 3 i + j: edge i x box axis j) is (ax[0][k], ax[1][k], ax[2][k]).
+  float ax[3][16], lo[16], hi[16];
 };
 
 // tri_axes in two steps, the bounds first: a caller that finds no box within them skips the rest.
@@ -207,33 +208,42 @@ __attribute__((always_inline)) inline void tri_axes_rest(float h, float slack, c
                                                          TriAxes& t) {
   const float e = h + slack;
   const V3 f[3] = {v[1] - v[0], v[2] - v[1], v[0] - v[2]};
+  auto put = [&](int k, float x, float y, float z) {
+    t.ax[0][k] = x, t.ax[1][k] = y, t.ax[2][k] = z;
+  };
   const V3 n = cross(f[0], f[1]);
-  {
-    const float p0 = dot(n, v[0]), p1 = dot(n, v[1]), p2 = dot(n, v[2]);
-    const float r = e * (std::fabs(n.x) + std::fabs(n.y) + std::fabs(n.z));
-    t.ax[0][0] = n.x, t.ax[0][1] = n.y, t.ax[0][2] = n.z;
-    t.lo[0] = std::min({p0, p1, p2}) - r, t.hi[0] = std::max({p0, p1, p2}) + r;
-  }
-  // Edge f x box axis: (0, -f.z, f.y), (f.z, 0, -f.x), (-f.y, f.x, 0); the zero terms left out
-  // (each adds a signed zero, which changes no comparison).
+  put(0, n.x, n.y, n.z);
+  // Edge f x box axis: (0, -f.z, f.y), (f.z, 0, -f.x), (-f.y, f.x, 0).
   for (int i = 0; i < 3; ++i) {
-    const float fx = f[i].x, fy = f[i].y, fz = f[i].z;
-    float* ax = t.ax[1 + 3 * i];
-    ax[0] = 0, ax[1] = -fz, ax[2] = fy;
-    ax[3] = fz, ax[4] = 0, ax[5] = -fx;
-    ax[6] = -fy, ax[7] = fx, ax[8] = 0;
-    float p[3][3];
-    for (int j = 0; j < 3; ++j) {
-      p[0][j] = -fz * v[j].y + fy * v[j].z;
-      p[1][j] = fz * v[j].x + -fx * v[j].z;
-      p[2][j] = -fy * v[j].x + fx * v[j].y;
-    }
-    const float r[3] = {e * (std::fabs(fz) + std::fabs(fy)), e * (std::fabs(fz) + std::fabs(fx)),
-                        e * (std::fabs(fy) + std::fabs(fx))};
-    for (int k = 0; k < 3; ++k) {
-      t.lo[1 + 3 * i + k] = std::min({p[k][0], p[k][1], p[k][2]}) - r[k];
-      t.hi[1 + 3 * i + k] = std::max({p[k][0], p[k][1], p[k][2]}) + r[k];
-    }
+    put(1 + 3 * i, 0, -f[i].z, f[i].y);
+    put(2 + 3 * i, f[i].z, 0, -f[i].x);
+    put(3 + 3 * i, -f[i].y, f[i].x, 0);
+  }
+  // Axes 1-8 eight at a time: the projections of the corners and the box's radius. A zero
+  // component adds a signed zero to a product, which changes no comparison.
+  {
+    F8 A, B, C;
+    __builtin_memcpy(&A, &t.ax[0][1], sizeof A);
+    __builtin_memcpy(&B, &t.ax[1][1], sizeof B);
+    __builtin_memcpy(&C, &t.ax[2][1], sizeof C);
+    const F8 p0 = A * v[0].x + B * v[0].y + C * v[0].z;
+    const F8 p1 = A * v[1].x + B * v[1].y + C * v[1].z;
+    const F8 p2 = A * v[2].x + B * v[2].y + C * v[2].z;
+    const F8 r =
+        e * ((F8)((I8)A & 0x7fffffff) + (F8)((I8)B & 0x7fffffff) + (F8)((I8)C & 0x7fffffff));
+    const F8 mn01 = p0 < p1 ? p0 : p1, mx01 = p0 > p1 ? p0 : p1;
+    const F8 lo = (mn01 < p2 ? mn01 : p2) - r, hi = (mx01 > p2 ? mx01 : p2) + r;
+    __builtin_memcpy(&t.lo[1], &lo, sizeof lo);
+    __builtin_memcpy(&t.hi[1], &hi, sizeof hi);
+  }
+  // The normal and axis 9, one at a time.
+  for (int k : {0, 9}) {
+    const float x = t.ax[0][k], y = t.ax[1][k], z = t.ax[2][k];
+    const float p0 = x * v[0].x + y * v[0].y + z * v[0].z;
+    const float p1 = x * v[1].x + y * v[1].y + z * v[1].z;
+    const float p2 = x * v[2].x + y * v[2].y + z * v[2].z;
+    const float r = e * (std::fabs(x) + std::fabs(y) + std::fabs(z));
+    t.lo[k] = std::min({p0, p1, p2}) - r, t.hi[k] = std::max({p0, p1, p2}) + r;
   }
 }
 
@@ -251,7 +261,7 @@ inline bool tri_axes_meet(const TriAxes& t, float h, float slack, float x, float
   for (int a = 0; a < 3; ++a)
     if (t.mn[a] - c[a] > e || t.mx[a] - c[a] < -e) return false;
   for (int k = 0; k < 10; ++k) {
-    const float q = t.ax[k][0] * x + t.ax[k][1] * y + t.ax[k][2] * z;
+    const float q = t.ax[0][k] * x + t.ax[1][k] * y + t.ax[2][k] * z;
     if (!(q >= t.lo[k] && q <= t.hi[k])) return false;
   }
   return true;
@@ -269,14 +279,14 @@ __attribute__((always_inline)) inline uint32_t tri_boxes_meet8(const TriAxes& t,
   __builtin_memcpy(&Z, z, sizeof Z);
   I8 ok;
   {
-    const F8 q = t.ax[0][0] * X + t.ax[0][1] * Y + t.ax[0][2] * Z;
+    const F8 q = t.ax[0][0] * X + t.ax[1][0] * Y + t.ax[2][0] * Z;
     ok = (q >= t.lo[0]) & (q <= t.hi[0]);
   }
   for (int i = 0; i < 3; ++i) {
     const int k = 1 + 3 * i;
-    const F8 q0 = t.ax[k][1] * Y + t.ax[k][2] * Z;
-    const F8 q1 = t.ax[k + 1][0] * X + t.ax[k + 1][2] * Z;
-    const F8 q2 = t.ax[k + 2][0] * X + t.ax[k + 2][1] * Y;
+    const F8 q0 = t.ax[1][k] * Y + t.ax[2][k] * Z;
+    const F8 q1 = t.ax[0][k + 1] * X + t.ax[2][k + 1] * Z;
+    const F8 q2 = t.ax[0][k + 2] * X + t.ax[1][k + 2] * Y;
     ok &= (q0 >= t.lo[k]) & (q0 <= t.hi[k]) & (q1 >= t.lo[k + 1]) & (q1 <= t.hi[k + 1]) &
           (q2 >= t.lo[k + 2]) & (q2 <= t.hi[k + 2]);
   }
