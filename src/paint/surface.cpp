@@ -5,6 +5,7 @@
 #include <embree3/rtcore.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -172,6 +173,27 @@ bool closest_callback(RTCPointQueryFunctionArguments* args) {
   return false;
 }
 
+// Sorts out[first..] and drops repeats (a triangle a BVH query meets in several leaves): through a
+// bitmap of all n triangles when the list is long enough that scanning n / 64 words costs less
+// than sorting it (a dab's list: thousands of the mesh's triangles), else by sorting. The
+// same list either way.
+void sort_unique(std::vector<uint32_t>& out, size_t first, size_t n) {
+  const size_t k = out.size() - first;
+  if (k < 64 || n / 64 > 4 * k) {
+    std::sort(out.begin() + std::ptrdiff_t(first), out.end());
+    out.erase(std::unique(out.begin() + std::ptrdiff_t(first), out.end()), out.end());
+    return;
+  }
+  thread_local std::vector<uint64_t> bits;
+  if (bits.size() < (n + 63) / 64) bits.assign((n + 63) / 64, 0);
+  for (size_t i = first; i < out.size(); ++i) bits[out[i] >> 6] |= uint64_t(1) << (out[i] & 63);
+  out.resize(first);
+  for (size_t w = 0; w < (n + 63) / 64; ++w) {
+    for (uint64_t b = bits[w]; b; b &= b - 1) out.push_back(uint32_t(64 * w) + uint32_t(std::countr_zero(b)));
+    bits[w] = 0;
+  }
+}
+
 struct GatherQuery {
   std::vector<uint32_t>* out;
 };
@@ -315,8 +337,7 @@ void PaintSurface::triangles_near(const float c[3], float r, std::vector<uint32_
     return n[0] == 0 && n[1] == 0 && n[2] == 0;
   });
   out.erase(it, out.end());
-  std::sort(out.begin() + std::ptrdiff_t(first), out.end());
-  out.erase(std::unique(out.begin() + std::ptrdiff_t(first), out.end()), out.end());
+  sort_unique(out, first, triangle_count());
 }
 
 namespace {
@@ -339,8 +360,7 @@ void PaintSurface::triangles_in_box(const float c[3], float h, float slack,
   const size_t first = out.size();
   BoxQuery q{this, &out, {c[0], c[1], c[2]}, h, slack};
   ask_box(embree_->scene, q, &box_callback);
-  std::sort(out.begin() + std::ptrdiff_t(first), out.end());
-  out.erase(std::unique(out.begin() + std::ptrdiff_t(first), out.end()), out.end());
+  sort_unique(out, first, triangle_count());
 }
 
 void PaintSurface::box_candidates(const float c[3], float h, float slack,
