@@ -420,9 +420,15 @@ uint32_t Refiner::put_block(Ctx& w, uint32_t old_ptr, uint32_t old_n, bool brick
   op.ptr = old_ptr, op.old_n = old_n;
   op.off = uint32_t(log.words.size()), op.n = uint32_t(w.words.size());
   log.words.insert(log.words.end(), w.words.begin(), w.words.end());
-  // The slot's index is the address: each slot written once, whole, by the thread adding it.
-  const auto slot = where_.push_back({&log, uint32_t(log.ops.size())});
-  op.temp = temp0_ + uint32_t(slot - where_.begin());
+  // The slot's index is the address: each slot written once, whole, by the thread whose log
+  // took it.
+  if (log.next == log.end) {
+    const auto first = where_.grow_by(kTempChunk);
+    log.next = uint32_t(first - where_.begin()), log.end = log.next + kTempChunk;
+  }
+  const uint32_t slot = log.next++;
+  where_[slot] = {&log, uint32_t(log.ops.size())};
+  op.temp = temp0_ + slot;
   log.ops.push_back(op);
   return op.temp;
 }

@@ -261,7 +261,10 @@ class Refiner {
     std::vector<Op> ops;
     std::vector<uint32_t> words;
     std::vector<Log*> children;
-    void clear() { ops.clear(), words.clear(), children.clear(); }
+    /// The log's share of temporary addresses not used yet: slots [next, end) of where_, taken
+    /// kTempChunk at a time (one atomic step per chunk, not per store).
+    uint32_t next = 0, end = 0;
+    void clear() { ops.clear(), words.clear(), children.clear(), next = end = 0; }
   };
   /// Where a temporary address's block is: its log and op.
   struct Where {
@@ -416,6 +419,7 @@ class Refiner {
   std::unordered_map<uint64_t, std::unique_ptr<Shard>> shards_;
   uint32_t temp0_ = 0;  // the pool's size at the run's start: temporary addresses start there
   tbb::concurrent_vector<Where> where_;  // per temporary address
+  static constexpr uint32_t kTempChunk = 32;
   std::mutex logs_mutex_;
   std::vector<Log*> taken_logs_;  // the run's task logs, given back after the replay
   std::vector<uint32_t> real_;    // per temporary address, its block's address once replayed

@@ -189,7 +189,8 @@ void sort_unique(std::vector<uint32_t>& out, size_t first, size_t n) {
   for (size_t i = first; i < out.size(); ++i) bits[out[i] >> 6] |= uint64_t(1) << (out[i] & 63);
   out.resize(first);
   for (size_t w = 0; w < (n + 63) / 64; ++w) {
-    for (uint64_t b = bits[w]; b; b &= b - 1) out.push_back(uint32_t(64 * w) + uint32_t(std::countr_zero(b)));
+    for (uint64_t b = bits[w]; b; b &= b - 1)
+      out.push_back(uint32_t(64 * w) + uint32_t(std::countr_zero(b)));
     bits[w] = 0;
   }
 }
