@@ -127,20 +127,21 @@ class BlockMap {
  public:
   const V* find(uint64_t key) const {
     const uint32_t b = block(key >> 6);
-    if (b == kNone || !(blocks_[b].present >> (key & 63) & 1)) return nullptr;
-    return &blocks_[b].v[key & 63];
+    if (b == kNone || !(at(b).present >> (key & 63) & 1)) return nullptr;
+    return &at(b).v[key & 63];
   }
   // Room for about n keys.
   void reserve(size_t n) { index_.reserve(n / 16 + 16); }
   V& find_or_add(uint64_t key, const V& init) {
     uint32_t b = block(key >> 6);
     if (b == kNone) {
-      b = uint32_t(blocks_.size());
-      blocks_.emplace_back();
+      b = count_++;
+      if (b % kChunk == 0) chunks_.emplace_back(new Block[kChunk]);
+      at(b).present = 0;
       index_.find_or_add(key >> 6, b);
       last_group_ = key >> 6, last_ = b;
     }
-    Block& bl = blocks_[b];
+    Block& bl = at(b);
     const uint64_t bit = uint64_t(1) << (key & 63);
     if (!(bl.present & bit)) bl.present |= bit, bl.v[key & 63] = init;
     return bl.v[key & 63];
@@ -149,9 +150,14 @@ class BlockMap {
  private:
   static constexpr uint32_t kNone = ~0u;
   struct Block {
-    uint64_t present = 0;
+    uint64_t present;
     V v[64];
   };
+  // Blocks in chunks that never move: a growing stroke copies none (a task cell's texels, a
+  // few dozen blocks of 0.5 KiB, were copied five times over as a vector grew).
+  static constexpr uint32_t kChunk = 16;
+  Block& at(uint32_t b) { return chunks_[b / kChunk][b % kChunk]; }
+  const Block& at(uint32_t b) const { return chunks_[b / kChunk][b % kChunk]; }
   uint32_t block(uint64_t group) const {
     if (group == last_group_) return last_;
     const uint32_t* b = index_.find(group);
@@ -160,7 +166,8 @@ class BlockMap {
     return *b;
   }
   FlatMap<uint32_t> index_;
-  std::vector<Block> blocks_;
+  std::vector<std::unique_ptr<Block[]>> chunks_;
+  uint32_t count_ = 0;
   mutable uint64_t last_group_ = ~uint64_t(0);
   mutable uint32_t last_ = kNone;
 };
