@@ -55,8 +55,8 @@ void Refiner::filter(std::span<const uint32_t> in, const CellBox& b,
 
 namespace {
 
-// Refiner::split's loop: a triangle is tested only against the children its bounding box
-// reaches, all of them at once when it reaches several.
+// Refiner::split's loop: a triangle is tested only when its bounding box reaches several
+// children, against all of them at once.
 __attribute__((always_inline)) inline void split_loop(const PaintSurface& s,
                                                       std::span<const uint32_t> in, V3 c,
                                                       const float* kx, const float* ky,
@@ -74,18 +74,14 @@ __attribute__((always_inline)) inline void split_loop(const PaintSurface& s,
     const uint32_t sx = (lo[0] ? 0x55u : 0u) | (hi[0] ? 0xaau : 0u),
                    sy = (lo[1] ? 0x33u : 0u) | (hi[1] ? 0xccu : 0u),
                    sz = (lo[2] ? 0x0fu : 0u) | (hi[2] ? 0xf0u : 0u);
-    uint32_t hit = sx & sy & sz & want;
+    const uint32_t reach = sx & sy & sz;
+    uint32_t hit = reach & want;
     if (!hit) continue;
-    if (!(hit & (hit - 1))) {
-      const int k = std::countr_zero(hit);
-      const V3 kc = {kx[k], ky[k], kz[k]};
-      // tri_meets_box written out: through the wrapper GCC inlines the whole scalar test into
-      // this AVX2 loop, which costs the dab 0.5% more instructions.
-      if (!tri_inside_box(kc, kh, p0, p1, p2, slack) && !tri_box_overlap(kc, kh, p0, p1, p2, slack))
-        continue;
-    } else {
-      hit &= tri_box_overlap8(kx, ky, kz, kh, p0, p1, p2, slack);
-    }
+    // A triangle whose bounds lie on one child's side of the three mid-planes (within the
+    // slack) meets that child: it meets the node's grown box (split's precondition), and the
+    // part of that box on the child's side lies in the child's grown box. Only triangles
+    // reaching several children are tested (those of them wanted).
+    if (reach & (reach - 1)) hit &= tri_box_overlap8(kx, ky, kz, kh, p0, p1, p2, slack);
     for (; hit; hit &= hit - 1) out[size_t(std::countr_zero(hit))].push_back(t);
   }
 }
@@ -264,8 +260,8 @@ constexpr size_t kChunk = 512;
 
 }  // namespace
 
-bool Refiner::whole_list_in_one(const ListBox& box, const CellBox& nb, const CellBox kids[8],
-                                uint32_t want, int& only) const {
+bool Refiner::whole_list_in_one(const ListBox& box, const CellBox& nb, uint32_t want,
+                                int& only) const {
   // split_loop's sides: a triangle whose lowest corner lies above c + slack reaches only the
   // upper child along that axis, one whose highest lies below c - slack only the lower.
   const float c[3] = {nb.c.x, nb.c.y, nb.c.z};
@@ -276,10 +272,7 @@ bool Refiner::whole_list_in_one(const ListBox& box, const CellBox& nb, const Cel
     else if (!(box.hi[a] < c[a] - slack_))
       return false;
   }
-  only = -1;
-  if (!(want >> k & 1)) return true;
-  if (!all_inside(box, kids[k])) return false;
-  only = k;
+  only = want >> k & 1 ? k : -1;
   return true;
 }
 
@@ -729,7 +722,7 @@ void Refiner::visit_general(Ctx& w, GeneralNode& n, const CellBox& nb,
   // Near the root a dab's list often lies in one child whole: it goes there untested, with its
   // bounds (the lists split() would make).
   int only = -1;
-  const bool whole = !full_split && box && whole_list_in_one(*box, nb, kids, want, only);
+  const bool whole = !full_split && box && whole_list_in_one(*box, nb, want, only);
   if (whole) {
     for (int c = 0; c < 8; ++c) parts[size_t(c)].clear();
     if (only >= 0) parts[size_t(only)].assign(tris.begin(), tris.end());

@@ -122,8 +122,12 @@ class Refiner {
   }
   /// The triangles of `in` meeting the box (order kept).
   void filter(std::span<const uint32_t> in, const CellBox& b, std::vector<uint32_t>& out) const;
-  /// The same for each of b's 8 children at once: a triangle is tested only against the
-  /// children its bounding box reaches (1-2 of 8 deep in the tree). out[c] as filter() gives.
+  /// The same for each of b's 8 children at once, for a list of triangles meeting b (as
+  /// filter() decides; every list the refiner splits is one): a triangle whose bounding box
+  /// lies on one child's side of b's three mid-planes (within the slack) goes to that child
+  /// untested, as it meets the part of b's grown box on that side; one reaching several is
+  /// tested against those (separating axes, 8 at once). out[c] is filter()'s list for child c
+  /// but for triangles within rounding of its grown faces, kept.
   using Split = std::array<std::vector<uint32_t>, 8>;
   /// Only the children in `want` (bit c: child c) are tested; the others' lists come out empty.
   void split(std::span<const uint32_t> in, const CellBox& b, Split& out,
@@ -173,9 +177,8 @@ class Refiner {
   /// Whether split(tris, nb, kids, out, want) would give every triangle of a list whose
   /// corners' bounds are `box` to one child, keeping all of them: then `only` is that child
   /// (-1: one not in want, every list empty). Decided from the bounds alone (the split's
-  /// bounding-box sides and tri_inside_box, which only grow with them): exact.
-  bool whole_list_in_one(const ListBox& box, const CellBox& nb, const CellBox kids[8],
-                         uint32_t want, int& only) const;
+  /// bounding-box sides, which only grow with them): exact.
+  bool whole_list_in_one(const ListBox& box, const CellBox& nb, uint32_t want, int& only) const;
   /// Whether every triangle of a list whose corners' bounds are `box` passes tri_inside_box(b).
   bool all_inside(const ListBox& box, const CellBox& b) const;
   /// The 8 children of a box: child(b, c) for each c, with each of the 6 distinct coordinates
