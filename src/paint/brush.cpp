@@ -575,6 +575,8 @@ OctreeTexture OctreeTexture::create(const PaintSurface& s, Rgba8 background, flo
   for (int k = 0; k < 3; ++k) origin[k] = 0.5f * (b.min[k] + b.max[k]) - 0.5f * size;
   OctreeTexture t = empty(origin, size, background);
   refine_surface(t, s, octree::kStartDepth);
+  // The start cells' lists a first dab on any of them splits (kept with the surface).
+  Refiner(t, s).prepare_start_lists();
   return t;
 }
 

@@ -887,12 +887,18 @@ void Refiner::visit_child(Ctx& w, GeneralNode& n, int c, const CellBox& cb,
       }
       // A leaf with no list at hand (made by an earlier run) that becomes a general node takes
       // its children's lists straight from the BVH, instead of its own list queried and then
-      // split; its own list then stays empty, so visit_general sees it as not `same`.
-      const bool queried = !full_c && level < depth_ - 2 && !region_.everything;
-      if (queried)
+      // split; its own list then stays empty, so visit_general sees it as not `same`. A start
+      // cell's list is at hand in the surface's table.
+      bool queried = !full_c && level < depth_ - 2 && !region_.everything;
+      if (queried && level == octree::kStartDepth) {
+        const std::span<const uint32_t> kept = start_list(cb.x, cb.y, cb.z);
+        full.assign(kept.begin(), kept.end());
+        queried = false;
+      } else if (queried) {
         full.clear();
-      else
+      } else {
         child_full();
+      }
       // A cell the surface only grazes within the boxes' slack may have no sub-cell the surface
       // meets once rounded: it stays a leaf.
       if (level == depth_ - 2) {
@@ -960,6 +966,75 @@ void Refiner::visit_child(Ctx& w, GeneralNode& n, int c, const CellBox& cb,
   }
 }
 
+struct Refiner::StartLists {
+  double origin[3], size;
+  std::vector<uint32_t> start;  // per cell (x + n (y + n z)), its list's first index in tris
+  std::vector<uint32_t> tris;
+};
+
+std::shared_ptr<const Refiner::StartLists> Refiner::start_lists() const {
+  if (start_) return start_;
+  const double size = double(ed_.texture().size());
+  {
+    std::lock_guard<std::mutex> lock(s_.derived_mutex_);
+    auto kept = std::static_pointer_cast<const StartLists>(s_.derived_);
+    if (kept && kept->size == size && kept->origin[0] == origin_[0] &&
+        kept->origin[1] == origin_[1] && kept->origin[2] == origin_[2])
+      return kept;
+  }
+  // Each triangle against the start cells its bounds reach (one cell of margin), with the
+  // test triangles_in_box makes on the boxes box() gives: the same lists.
+  const int level = octree::kStartDepth;
+  const uint32_t n = 1u << level;
+  const double s = cell_size(level);
+  auto lists = std::make_shared<StartLists>();
+  for (int a = 0; a < 3; ++a) lists->origin[a] = origin_[a];
+  lists->size = size;
+  std::vector<std::pair<uint32_t, uint32_t>> hits;  // (cell, triangle)
+  for (uint32_t t = 0; t < s_.triangle_count(); ++t) {
+    const float* nm = s_.normal(t);
+    if (nm[0] == 0 && nm[1] == 0 && nm[2] == 0) continue;
+    uint32_t lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+      double mn = INFINITY, mx = -INFINITY;
+      for (int k = 0; k < 3; ++k)
+        mn = std::min(mn, double(s_.corner(t, k)[a])),
+        mx = std::max(mx, double(s_.corner(t, k)[a]));
+      const double l = std::floor((mn - origin_[a]) / s) - 1,
+                   h = std::floor((mx - origin_[a]) / s) + 1;
+      lo[a] = uint32_t(std::clamp(l, 0.0, double(n - 1)));
+      hi[a] = uint32_t(std::clamp(h, 0.0, double(n - 1)));
+    }
+    const V3 p0 = v3(s_.corner(t, 0)), p1 = v3(s_.corner(t, 1)), p2 = v3(s_.corner(t, 2));
+    for (uint32_t z = lo[2]; z <= hi[2]; ++z)
+      for (uint32_t y = lo[1]; y <= hi[1]; ++y)
+        for (uint32_t x = lo[0]; x <= hi[0]; ++x) {
+          const CellBox b = box(level, x, y, z);
+          if (tri_meets_box(b.c, b.h, p0, p1, p2, slack_)) hits.push_back({x + n * (y + n * z), t});
+        }
+  }
+  // Counted, then placed: each cell's triangles in index order.
+  lists->start.assign(size_t(n) * n * n + 1, 0);
+  for (const auto& h : hits) ++lists->start[h.first + 1];
+  for (size_t i = 1; i < lists->start.size(); ++i) lists->start[i] += lists->start[i - 1];
+  lists->tris.resize(hits.size());
+  std::vector<uint32_t> pos(lists->start.begin(), lists->start.end() - 1);
+  for (const auto& h : hits) lists->tris[pos[h.first]++] = h.second;
+  {
+    std::lock_guard<std::mutex> lock(s_.derived_mutex_);
+    s_.derived_ = lists;
+  }
+  return lists;
+}
+
+std::span<const uint32_t> Refiner::start_list(uint32_t x, uint32_t y, uint32_t z) const {
+  if (!start_) throw std::logic_error("octree refiner: start lists not prepared");
+  const StartLists* l = start_.get();
+  const uint32_t n = 1u << octree::kStartDepth;
+  const size_t i = x + n * (y + size_t(n) * z);
+  return std::span<const uint32_t>(l->tris).subspan(l->start[i], l->start[i + 1] - l->start[i]);
+}
+
 void Refiner::give_back_logs() {
   for (Log* l : taken_logs_) l->clear(), put_log(*l);
   taken_logs_.clear();
@@ -970,6 +1045,9 @@ void Refiner::run(const Region& region, std::span<const uint32_t> tris, int dept
                   LeafPainter* painter) {
   give_back_logs();  // those of a run a throw cut short
   region_ = region, depth_ = depth, painter_ = painter;
+  // Start cells may be refined below (see visit_child): their lists at hand before any thread
+  // asks.
+  if (!region.everything && depth - 2 > octree::kStartDepth) prepare_start_lists();
   {
     // The calling thread's context, from the shared pool too: a click's refiner is made and
     // dropped per dab, and a warm context saves its lists' allocations.

@@ -226,6 +226,17 @@ class Refiner {
   /// mesh; off by default.
   void keep_brick_lists(bool on) { keep_ = on; }
 
+  /// The triangles meeting the start cell (x, y, z) (level octree::kStartDepth) of this
+  /// refiner's texture, sorted: exactly what triangles_in_box gives for its box. From a table
+  /// of every start cell, made on the first call for the texture's cube (O(T); shared by
+  /// every refiner of the surface until another cube is asked about), so that refining a
+  /// start cell splits its list instead of querying the BVH for each child: the serial head of
+  /// a dab on fresh surface.
+  std::span<const uint32_t> start_list(uint32_t x, uint32_t y, uint32_t z) const;
+  /// Makes (or finds) that table now: run() does before a visit that may need it (its
+  /// threads then only read it); OctreeTexture::create does, so a first dab does not.
+  void prepare_start_lists() { start_ = start_lists(); }
+
   /// Levels from a task's cell to the leaves: a task cell holds 4 x 4 x 4 bricks' cells (16^3
   /// leaves), few enough tasks that a dab's per-task parts stay small, enough for two threads
   /// on a radius-16 dab (measured against 2 and 3 levels: 3 is within noise, 2 slower).
@@ -404,6 +415,10 @@ class Refiner {
   static Rgba8 brick_avg(const Brick& b);
   /// A general node whose cells are all leaf-only general nodes becomes a brick.
   bool try_compact(const Ctx& w, const GeneralNode& n, Brick& out) const;
+
+  struct StartLists;
+  std::shared_ptr<const StartLists> start_lists() const;
+  std::shared_ptr<const StartLists> start_;
 
   OctreeEditor ed_;
   const PaintSurface& s_;

@@ -242,6 +242,37 @@ TEST(PaintGeometry, SplitKeepsEveryTriangleMeetingAChildAndNothingFar) {
   EXPECT_LT(untested, kept / 1000 + 1);  // only the rounding cases differ from filter()
 }
 
+// The start cells' lists a dab splits instead of querying the BVH (kept with the surface per
+// texture cube) against the BVH's box query on each start cell: the same triangles, for two
+// textures of one surface with different cubes, asked in turn (the table follows the cube).
+TEST(PaintGeometry, StartListsEqualTheBoxQueries) {
+  const Mesh m =
+      test::merge({test::uv_sphere(1.0, 30, 60), test::sheet(-1.2, -0.2, -0.6, 0.6, 0.0, 25, true),
+                   test::sheet(-1.2, -0.2, -0.6, 0.6, 0.002, 25, false)});
+  const PaintSurface s(m);
+  OctreeTexture a = OctreeTexture::create(s, 0, 0.05f), b = OctreeTexture::create(s, 0, 0.3f);
+  size_t found = 0;
+  for (int round = 0; round < 2; ++round)
+    for (OctreeTexture* t : {&a, &b}) {
+      detail::Refiner r(*t, s);
+      r.prepare_start_lists();
+      const uint32_t n = 1u << octree::kStartDepth;
+      for (uint32_t z = 0; z < n; ++z)
+        for (uint32_t y = 0; y < n; ++y)
+          for (uint32_t x = 0; x < n; ++x) {
+            const detail::CellBox cb = r.box(octree::kStartDepth, x, y, z);
+            const float c[3] = {cb.c.x, cb.c.y, cb.c.z};
+            std::vector<uint32_t> want;
+            s.triangles_in_box(c, cb.h, r.slack(), want);
+            const std::span<const uint32_t> got = r.start_list(x, y, z);
+            ASSERT_EQ(std::vector<uint32_t>(got.begin(), got.end()), want)
+                << "cell " << x << " " << y << " " << z << " margin " << (t == &a ? 0.05 : 0.3);
+            found += got.size();
+          }
+    }
+  EXPECT_GT(found, 4 * s.triangle_count());  // every triangle in some cell, four times over
+}
+
 // The paint layer rounds colours to bytes without calling lround (dabs and means round
 // thousands of values): every float of [0, 1] in steps of 2^-20, every tie (k + 0.5) / 255 and
 // its neighbours, and doubles in [0, 255] must round as clamp(lround(255 v)) and clamp(lround(v))

@@ -4,11 +4,16 @@
 
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <vector>
 
 #include "limn/mesh/mesh.hpp"
 
 namespace limn {
+
+namespace detail {
+class Refiner;
+}
 
 /// A pinhole camera (the subdiv layer's conventions): pixel x to the right, y down, pixel centres
 /// at +0.5, vertical field of view in degrees.
@@ -37,7 +42,8 @@ struct SurfaceHit {
 };
 
 /// Triangles (each face fanned from its first corner), unit face normals and an Embree BVH.
-/// Read-only after construction; the queries are thread-safe.
+/// Read-only after construction (but for a table the paint layer derives once, under a lock);
+/// the queries are thread-safe.
 class PaintSurface {
  public:
   /// Builds the BVH. Throws InputError when the mesh has no faces. O(T log T).
@@ -92,6 +98,11 @@ class PaintSurface {
   Box bounds_;
   struct Embree;
   std::unique_ptr<Embree> embree_;
+  // The paint layer's refiner keeps here, per surface, the triangle lists of a texture cube's
+  // start cells (Refiner::start_list): made once, read by every dab refining one of them.
+  friend class detail::Refiner;
+  mutable std::mutex derived_mutex_;
+  mutable std::shared_ptr<const void> derived_;
 };
 
 }  // namespace limn
