@@ -7,6 +7,7 @@
 #include <bit>
 #include <cmath>
 
+#include <limits>
 #include <mutex>
 #include <stdexcept>
 
@@ -982,44 +983,63 @@ std::shared_ptr<const Refiner::StartLists> Refiner::start_lists() const {
         kept->origin[1] == origin_[1] && kept->origin[2] == origin_[2])
       return kept;
   }
-  // Each triangle against the start cells its bounds reach (one cell of margin), with the
-  // test triangles_in_box makes on the boxes box() gives: the same lists.
+  // Each triangle against the start cells its bounds reach (grown by the slack and by the
+  // rounding of the boxes' float centres), with the test triangles_in_box makes on the boxes
+  // box() gives: the same lists.
   const int level = octree::kStartDepth;
   const uint32_t n = 1u << level;
   const double s = cell_size(level);
   auto lists = std::make_shared<StartLists>();
   for (int a = 0; a < 3; ++a) lists->origin[a] = origin_[a];
   lists->size = size;
-  std::vector<std::pair<uint32_t, uint32_t>> hits;  // (cell, triangle)
-  for (uint32_t t = 0; t < s_.triangle_count(); ++t) {
-    const float* nm = s_.normal(t);
-    if (nm[0] == 0 && nm[1] == 0 && nm[2] == 0) continue;
-    uint32_t lo[3], hi[3];
-    for (int a = 0; a < 3; ++a) {
-      double mn = INFINITY, mx = -INFINITY;
-      for (int k = 0; k < 3; ++k)
-        mn = std::min(mn, double(s_.corner(t, k)[a])),
-        mx = std::max(mx, double(s_.corner(t, k)[a]));
-      const double l = std::floor((mn - origin_[a]) / s) - 1,
-                   h = std::floor((mx - origin_[a]) / s) + 1;
-      lo[a] = uint32_t(std::clamp(l, 0.0, double(n - 1)));
-      hi[a] = uint32_t(std::clamp(h, 0.0, double(n - 1)));
+  double grow[3];
+  for (int a = 0; a < 3; ++a)
+    grow[a] = 2 * double(slack_) +
+              8 * double(std::numeric_limits<float>::epsilon()) * (std::fabs(origin_[a]) + size);
+  std::vector<CellBox> boxes(size_t(n) * n * n);
+  for (uint32_t z = 0; z < n; ++z)
+    for (uint32_t y = 0; y < n; ++y)
+      for (uint32_t x = 0; x < n; ++x) boxes[x + n * (y + n * z)] = box(level, x, y, z);
+  // In chunks of triangles on TBB's threads, each chunk's (cell, triangle) pairs in index order.
+  constexpr uint32_t kTris = 8192;
+  const uint32_t count = uint32_t(s_.triangle_count());
+  std::vector<std::vector<std::pair<uint32_t, uint32_t>>> parts((count + kTris - 1) / kTris);
+  tbb::parallel_for(size_t(0), parts.size(), [&](size_t part) {
+    std::vector<std::pair<uint32_t, uint32_t>>& hits = parts[part];
+    for (uint32_t t = uint32_t(part) * kTris; t < std::min(count, uint32_t(part + 1) * kTris);
+         ++t) {
+      const float* nm = s_.normal(t);
+      if (nm[0] == 0 && nm[1] == 0 && nm[2] == 0) continue;
+      uint32_t lo[3], hi[3];
+      for (int a = 0; a < 3; ++a) {
+        double mn = INFINITY, mx = -INFINITY;
+        for (int k = 0; k < 3; ++k)
+          mn = std::min(mn, double(s_.corner(t, k)[a])),
+          mx = std::max(mx, double(s_.corner(t, k)[a]));
+        const double l = std::floor((mn - grow[a] - origin_[a]) / s),
+                     h = std::floor((mx + grow[a] - origin_[a]) / s);
+        lo[a] = uint32_t(std::clamp(l, 0.0, double(n - 1)));
+        hi[a] = uint32_t(std::clamp(h, 0.0, double(n - 1)));
+      }
+      const V3 p0 = v3(s_.corner(t, 0)), p1 = v3(s_.corner(t, 1)), p2 = v3(s_.corner(t, 2));
+      for (uint32_t z = lo[2]; z <= hi[2]; ++z)
+        for (uint32_t y = lo[1]; y <= hi[1]; ++y)
+          for (uint32_t x = lo[0]; x <= hi[0]; ++x) {
+            const uint32_t cell = x + n * (y + n * z);
+            const CellBox& b = boxes[cell];
+            if (tri_meets_box(b.c, b.h, p0, p1, p2, slack_)) hits.push_back({cell, t});
+          }
     }
-    const V3 p0 = v3(s_.corner(t, 0)), p1 = v3(s_.corner(t, 1)), p2 = v3(s_.corner(t, 2));
-    for (uint32_t z = lo[2]; z <= hi[2]; ++z)
-      for (uint32_t y = lo[1]; y <= hi[1]; ++y)
-        for (uint32_t x = lo[0]; x <= hi[0]; ++x) {
-          const CellBox b = box(level, x, y, z);
-          if (tri_meets_box(b.c, b.h, p0, p1, p2, slack_)) hits.push_back({x + n * (y + n * z), t});
-        }
-  }
+  });
   // Counted, then placed: each cell's triangles in index order.
   lists->start.assign(size_t(n) * n * n + 1, 0);
-  for (const auto& h : hits) ++lists->start[h.first + 1];
+  for (const auto& hits : parts)
+    for (const auto& h : hits) ++lists->start[h.first + 1];
   for (size_t i = 1; i < lists->start.size(); ++i) lists->start[i] += lists->start[i - 1];
-  lists->tris.resize(hits.size());
+  lists->tris.resize(lists->start.back());
   std::vector<uint32_t> pos(lists->start.begin(), lists->start.end() - 1);
-  for (const auto& h : hits) lists->tris[pos[h.first]++] = h.second;
+  for (const auto& hits : parts)
+    for (const auto& h : hits) lists->tris[pos[h.first]++] = h.second;
   {
     std::lock_guard<std::mutex> lock(s_.derived_mutex_);
     s_.derived_ = lists;
