@@ -587,9 +587,7 @@ bool Refiner::build_brick(Ctx& w, const CellBox& cb, const LeafCell& leaf,
       w.painter->paint(leaf_box(l, m), b.cell[m], ll.list(m), LeafPainter::kNoMemo),
           ++w.stats.leaves_painted;
     }
-    w.painter->flush();
   }
-  b.avg = brick_avg(b);
   return true;
 }
 
@@ -681,7 +679,6 @@ void Refiner::visit_brick(Ctx& w, Brick& b, const CellBox& bb, std::span<const u
           visit_leaf(m,
                      std::span<const uint32_t>(w.kept->tris.data() + kept->off[m], kept->len[m]));
       }
-      if (w.painter) w.painter->flush();
       return;
     }
   }
@@ -705,7 +702,6 @@ void Refiner::visit_brick(Ctx& w, Brick& b, const CellBox& bb, std::span<const u
     }
     visit_leaf(m, list);
   }
-  if (w.painter) w.painter->flush();
 }
 
 void Refiner::visit_general(Ctx& w, GeneralNode& n, const CellBox& nb,
@@ -745,8 +741,30 @@ void Refiner::visit_general(Ctx& w, GeneralNode& n, const CellBox& nb,
         visit_child(w, n, c, kids[c], tparts[size_t(c)],
                     full_split ? &full_parts[size_t(c)] : nullptr, whole ? box : nullptr);
   }
+  finish_bricks(w);
   if (w.painter) w.painter->flush();
   n.avg = general_avg(w, n);
+}
+
+void Refiner::finish_bricks(Ctx& w) {
+  if (!w.pending) return;
+  if (w.painter) w.painter->flush();
+  for (int i = 0; i < w.pending; ++i) {
+    PendingBrick& p = w.bricks[size_t(i)];
+    GeneralNode& n = *p.n;
+    if (p.fresh) {
+      p.b.avg = brick_avg(p.b);
+      n.kind[p.c] = CellKind::brick;
+      n.ptr[p.c] = store_brick(w, p.b, 0, nullptr);
+    } else if (!same_cells(p.before, p.b)) {
+      // A brick the visit left as it was (its texels already as strong from an earlier dab of
+      // the stroke, or out of the brush's reach) is not averaged, encoded and written again:
+      // the same words would come out.
+      p.b.avg = brick_avg(p.b);
+      n.ptr[p.c] = store_brick(w, p.b, n.ptr[p.c], &p.before);
+    }
+  }
+  w.pending = 0;
 }
 
 Refiner::Shard& Refiner::shard(uint64_t key) {
@@ -817,6 +835,7 @@ void Refiner::visit_parts(Ctx& w, GeneralNode& n, const CellBox kids[8], uint32_
     for (int i = 0; i < count; ++i) {
       if (sh[i]) w.painter = sh[i]->painter, w.kept = &sh[i]->kept;
       visit(w, i);
+      finish_bricks(w);  // through this child's painter
     }
     w.painter = painter, w.kept = kept;
     return;
@@ -840,6 +859,7 @@ void Refiner::visit_parts(Ctx& w, GeneralNode& n, const CellBox kids[8], uint32_
           x.painter = sh[i] ? sh[i]->painter : nullptr;
           x.kept = sh[i] ? &sh[i]->kept : &kept_;
           visit(x, i);
+          finish_bricks(x);
           {
             std::lock_guard<std::mutex> lock(stats_mutex_);
             add(task_stats_, x.stats);
@@ -903,10 +923,10 @@ void Refiner::visit_child(Ctx& w, GeneralNode& n, int c, const CellBox& cb,
       // A cell the surface only grazes within the boxes' slack may have no sub-cell the surface
       // meets once rounded: it stays a leaf.
       if (level == depth_ - 2) {
-        Brick b;
-        if (!build_brick(w, cb, n.leaf[c], full, tc, b)) break;
-        n.kind[c] = CellKind::brick;
-        n.ptr[c] = store_brick(w, b, 0, nullptr);
+        PendingBrick& p = w.bricks[w.pending];
+        if (!build_brick(w, cb, n.leaf[c], full, tc, p.b)) break;
+        p.n = &n, p.c = c, p.fresh = true;
+        ++w.pending;
       } else {
         GeneralNode g = refine_leaf(w, cb, n.leaf[c], queried ? nullptr : &full);
         bool any = false;
@@ -919,6 +939,7 @@ void Refiner::visit_child(Ctx& w, GeneralNode& n, int c, const CellBox& cb,
       break;
     }
     case CellKind::general: {
+      finish_bricks(w);  // their stores first, in child order
       // From the log when just stored by this task (an exploded brick's children).
       uint32_t at = 0;
       const std::span<const uint32_t> words = block(w, n.ptr[c], at);
@@ -943,6 +964,7 @@ void Refiner::visit_child(Ctx& w, GeneralNode& n, int c, const CellBox& cb,
       const std::span<const uint32_t> words = block(w, n.ptr[c] & ~octree::kBrickDoubleFlag, at);
       Brick b = decode_brick(words, at | (n.ptr[c] & octree::kBrickDoubleFlag));
       if (level + 2 < depth_) {
+        finish_bricks(w);  // their stores first, in child order
         const uint32_t old_ptr = n.ptr[c] & ~octree::kBrickDoubleFlag;
         GeneralNode g = explode(w, b, cb);
         release(w, old_ptr, brick_block_words(b.mask, b.dbl), true);
@@ -950,15 +972,10 @@ void Refiner::visit_child(Ctx& w, GeneralNode& n, int c, const CellBox& cb,
         n.kind[c] = CellKind::general;
         store_general(w, g, 0, 0, n.ptr[c], n.info[c]);
       } else {
-        // A brick the visit leaves as it was (its texels already as strong from an earlier
-        // dab of the stroke, or out of the brush's reach) is not averaged, encoded and
-        // written again: the same words would come out.
-        const Brick before = b;
-        visit_brick(w, b, cb, tc);
-        if (!same_cells(before, b)) {
-          b.avg = brick_avg(b);
-          n.ptr[c] = store_brick(w, b, n.ptr[c], &before);
-        }
+        PendingBrick& p = w.bricks[w.pending++];
+        p.n = &n, p.c = c, p.fresh = false;
+        p.b = b, p.before = b;
+        visit_brick(w, p.b, cb, tc);
       }
       break;
     }

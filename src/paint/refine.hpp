@@ -305,7 +305,17 @@ class Refiner {
   /// What one task's visit writes (a task runs on one thread at a time): per level its lists,
   /// the brick builder's lists, the encoder's words, counts; and the painter, kept lists and
   /// log of the task.
+  /// A brick visited (or built) and painted whose rays may be in flight: averaged and stored
+  /// by finish_bricks, so that the rays of a node's bricks go out together.
+  struct PendingBrick {
+    GeneralNode* n;  ///< its parent, slot c
+    int c;
+    bool fresh;  ///< built from a leaf (else `before` is the brick as it was)
+    Brick b, before;
+  };
   struct Ctx {
+    std::array<PendingBrick, 8> bricks;  // a node's children at most
+    int pending = 0;
     std::array<Scratch, octree::kMaxDepth + 1> scratch;
     std::vector<uint64_t> masks;  // a brick's list's leaf masks (leaf_masks)
     LeafLists lists;              // a brick's leaves' lists
@@ -384,6 +394,8 @@ class Refiner {
   void give_back_logs();
   /// The task cell `key`'s shard (made on first use; any thread).
   Shard& shard(uint64_t key);
+  /// Flushes the painter and averages and stores the pending bricks, in the order visited.
+  void finish_bricks(Ctx& w);
   /// Paints b's leaves in the region; b.avg is left for the caller (stale if a cell changed).
   void visit_brick(Ctx& w, Brick& b, const CellBox& bb, std::span<const uint32_t> tris);
   /// A new general node for the leaf cell `cb` (refined one level); leaves its full list split
