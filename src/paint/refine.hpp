@@ -239,7 +239,8 @@ class Refiner {
 
   /// Levels from a task's cell to the leaves: a task cell holds 4 x 4 x 4 bricks' cells (16^3
   /// leaves), few enough tasks that a dab's per-task parts stay small, enough for two threads
-  /// on a radius-16 dab (measured against 2 and 3 levels: 3 is within noise, 2 slower).
+  /// on a radius-16 dab (measured against 2 and 3 levels: both slower, 3 by 10-20% once the
+  /// per-task work shrank).
   static constexpr int kTaskDepth = 4;
 
   RefineStats stats;
@@ -302,9 +303,6 @@ class Refiner {
     std::vector<uint32_t> full;
     Split parts, full_parts;
   };
-  /// What one task's visit writes (a task runs on one thread at a time): per level its lists,
-  /// the brick builder's lists, the encoder's words, counts; and the painter, kept lists and
-  /// log of the task.
   /// A brick visited (or built) and painted whose rays may be in flight: averaged and stored
   /// by finish_bricks, so that the rays of a node's bricks go out together.
   struct PendingBrick {
@@ -313,6 +311,9 @@ class Refiner {
     bool fresh;  ///< built from a leaf (else `before` is the brick as it was)
     Brick b, before;
   };
+  /// What one task's visit writes (a task runs on one thread at a time): its pending bricks,
+  /// per level its lists, the brick builder's masks and lists, the encoder's words, counts;
+  /// and the painter, kept lists and log of the task.
   struct Ctx {
     std::array<PendingBrick, 8> bricks;  // a node's children at most
     int pending = 0;
@@ -349,6 +350,7 @@ class Refiner {
   /// Which leaves of the brick `bb` (bit m, leaf_box(l, m)) meet the region and lie in a
   /// child of bb that does: meets() on each, from per-axis terms (the same float operations).
   uint64_t meeting_leaves(const CellBox& bb, const BrickLeaves& l) const;
+  /// leaf_masks with the brick's leaves at hand.
   void leaf_masks(std::span<const uint32_t> in, const CellBox& bb, const BrickLeaves& l,
                   uint64_t want, std::vector<uint64_t>& masks) const;
   void full_tris(const CellBox& b, std::span<const uint32_t> region_tris,
@@ -396,7 +398,8 @@ class Refiner {
   Shard& shard(uint64_t key);
   /// Flushes the painter and averages and stores the pending bricks, in the order visited.
   void finish_bricks(Ctx& w);
-  /// Paints b's leaves in the region; b.avg is left for the caller (stale if a cell changed).
+  /// Paints b's leaves in the region, leaving the painter unflushed (see finish_bricks); b.avg
+  /// is left for the caller (stale if a cell changed).
   void visit_brick(Ctx& w, Brick& b, const CellBox& bb, std::span<const uint32_t> tris);
   /// A new general node for the leaf cell `cb` (refined one level); leaves its full list split
   /// by child in cb's scratch (`full_parts`). `full` null: the children's lists come from the
@@ -405,8 +408,8 @@ class Refiner {
                           const std::vector<uint32_t>* full);
   /// A new brick for the leaf cell `cb` (two levels), visited at once: what make-then-visit
   /// did, with the region's lists taken from the full ones (`tris`, the region's list for cb,
-  /// is a subset of `full`) instead of split again. False (b.mask 0) when no sub-cell meets
-  /// the surface.
+  /// is a subset of `full`) instead of split again, the painter left unflushed and b.avg unset
+  /// (see finish_bricks). False (b.mask 0) when no sub-cell meets the surface.
   bool build_brick(Ctx& w, const CellBox& cb, const LeafCell& leaf, std::span<const uint32_t> full,
                    std::span<const uint32_t> tris, Brick& b);
   GeneralNode explode(Ctx& w, const Brick& b, const CellBox& bb);
