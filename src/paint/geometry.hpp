@@ -107,6 +107,26 @@ inline bool tri_meets_box(V3 c, float h, V3 a, V3 b, V3 d, float slack) {
 using F8 = float __attribute__((vector_size(32)));
 using I8 = int32_t __attribute__((vector_size(32)));
 
+// Bit k set where lane k of a comparison result is true: or-reduced in three shuffles (a
+// lane-by-lane loop was 4 instructions a lane). By reference and always inlined: no vector
+// crosses a call.
+__attribute__((always_inline)) inline uint32_t lane_bits(const I8& ok) {
+  const I8 lane_bit = {1, 2, 4, 8, 16, 32, 64, 128};
+  I8 m = ok & lane_bit;
+#if defined(__clang__)
+  m |= __builtin_shufflevector(m, m, 4, 5, 6, 7, 0, 1, 2, 3);
+  m |= __builtin_shufflevector(m, m, 2, 3, 0, 1, 6, 7, 4, 5);
+  m |= __builtin_shufflevector(m, m, 1, 0, 3, 2, 5, 4, 7, 6);
+#else
+  const I8 halves = {4, 5, 6, 7, 0, 1, 2, 3}, pairs = {2, 3, 0, 1, 6, 7, 4, 5},
+           ones = {1, 0, 3, 2, 5, 4, 7, 6};
+  m |= __builtin_shuffle(m, halves);
+  m |= __builtin_shuffle(m, pairs);
+  m |= __builtin_shuffle(m, ones);
+#endif
+  return uint32_t(m[0]);
+}
+
 __attribute__((always_inline)) inline uint32_t tri_box_overlap8(const float* cx, const float* cy,
                                                                 const float* cz, float h, V3 a,
                                                                 V3 b, V3 d, float slack) {
@@ -163,21 +183,7 @@ __attribute__((always_inline)) inline uint32_t tri_box_overlap8(const float* cx,
 #undef LIMN_MIN3
 #undef LIMN_MAX3
 #undef LIMN_ABS
-  // Lane k's bit, or-reduced in three shuffles (a lane-by-lane loop was 4 instructions a lane).
-  const I8 lane_bit = {1, 2, 4, 8, 16, 32, 64, 128};
-  I8 m = ok & lane_bit;
-#if defined(__clang__)
-  m |= __builtin_shufflevector(m, m, 4, 5, 6, 7, 0, 1, 2, 3);
-  m |= __builtin_shufflevector(m, m, 2, 3, 0, 1, 6, 7, 4, 5);
-  m |= __builtin_shufflevector(m, m, 1, 0, 3, 2, 5, 4, 7, 6);
-#else
-  const I8 halves = {4, 5, 6, 7, 0, 1, 2, 3}, pairs = {2, 3, 0, 1, 6, 7, 4, 5},
-           ones = {1, 0, 3, 2, 5, 4, 7, 6};
-  m |= __builtin_shuffle(m, halves);
-  m |= __builtin_shuffle(m, pairs);
-  m |= __builtin_shuffle(m, ones);
-#endif
-  return uint32_t(m[0]);
+  return lane_bits(ok);
 }
 
 // A triangle's separating axes for testing it against many boxes of one half size h (grown by
@@ -290,20 +296,7 @@ __attribute__((always_inline)) inline uint32_t tri_boxes_meet8(const TriAxes& t,
     ok &= (q0 >= t.lo[k]) & (q0 <= t.hi[k]) & (q1 >= t.lo[k + 1]) & (q1 <= t.hi[k + 1]) &
           (q2 >= t.lo[k + 2]) & (q2 <= t.hi[k + 2]);
   }
-  const I8 lane_bit = {1, 2, 4, 8, 16, 32, 64, 128};
-  I8 m = ok & lane_bit;
-#if defined(__clang__)
-  m |= __builtin_shufflevector(m, m, 4, 5, 6, 7, 0, 1, 2, 3);
-  m |= __builtin_shufflevector(m, m, 2, 3, 0, 1, 6, 7, 4, 5);
-  m |= __builtin_shufflevector(m, m, 1, 0, 3, 2, 5, 4, 7, 6);
-#else
-  const I8 halves = {4, 5, 6, 7, 0, 1, 2, 3}, pairs = {2, 3, 0, 1, 6, 7, 4, 5},
-           ones = {1, 0, 3, 2, 5, 4, 7, 6};
-  m |= __builtin_shuffle(m, halves);
-  m |= __builtin_shuffle(m, pairs);
-  m |= __builtin_shuffle(m, ones);
-#endif
-  return uint32_t(m[0]);
+  return lane_bits(ok);
 }
 
 // Closest point to p on triangle abc, by which Voronoi region of the triangle p projects into

@@ -24,6 +24,16 @@ namespace {
 
 using paint_detail::V3;
 
+// The cell of `level` holding triangle tri's first corner.
+void corner_cell(const OctreeTexture& t, const PaintSurface& s, uint32_t tri, int level,
+                 uint32_t xyz[3]) {
+  const uint32_t n = 1u << level;
+  for (int k = 0; k < 3; ++k) {
+    const float cell = std::floor((s.corner(tri, 0)[k] - t.origin()[k]) / t.size() * float(n));
+    xyz[k] = uint32_t(std::clamp(cell, 0.0f, float(n - 1)));
+  }
+}
+
 // Random triangles around 8 child boxes of a random cell, at scales from far larger to far
 // smaller than the cell, many of them grazing a box face within the slack.
 TEST(PaintGeometry, EightBoxTestEqualsTheScalarTest) {
@@ -145,13 +155,8 @@ TEST(PaintGeometry, LeafMasksEqualTestingEachLeaf) {
   for (int iter = 0; iter < 1500; ++iter) {
     const int level = 1 + int(rng() % 10);
     const uint32_t tri = uint32_t(rng() % s.triangle_count());
-    const uint32_t n = 1u << level;
     uint32_t xyz[3];
-    for (int k = 0; k < 3; ++k) {
-      const float cell =
-          std::floor((s.corner(tri, 0)[k] - tex.origin()[k]) / tex.size() * float(n));
-      xyz[k] = uint32_t(std::clamp(cell, 0.0f, float(n - 1)));
-    }
+    corner_cell(tex, s, tri, level, xyz);
     const detail::CellBox bb = r.box(level, xyz[0], xyz[1], xyz[2]);
     std::vector<uint32_t> list;
     const float c[3] = {bb.c.x, bb.c.y, bb.c.z};
@@ -202,13 +207,8 @@ TEST(PaintGeometry, SplitKeepsEveryTriangleMeetingAChildAndNothingFar) {
   for (int iter = 0; iter < 1000; ++iter) {
     const int level = int(rng() % 12);
     const uint32_t tri = uint32_t(rng() % s.triangle_count());
-    const uint32_t n = 1u << level;
     uint32_t xyz[3];
-    for (int k = 0; k < 3; ++k) {
-      const float cell =
-          std::floor((s.corner(tri, 0)[k] - tex.origin()[k]) / tex.size() * float(n));
-      xyz[k] = uint32_t(std::clamp(cell, 0.0f, float(n - 1)));
-    }
+    corner_cell(tex, s, tri, level, xyz);
     const detail::CellBox cb = r.box(level, xyz[0], xyz[1], xyz[2]);
     std::vector<uint32_t> near, list;
     const float c[3] = {cb.c.x, cb.c.y, cb.c.z};
@@ -432,12 +432,8 @@ TEST(PaintGeometry, WholeListShortcutGivesTheSplitsLists) {
     const int level = int(rng() % 4);  // cells far larger than the triangles
     const uint32_t tri = uint32_t(rng() % s.triangle_count());
     const float p[3] = {s.corner(tri, 0)[0], s.corner(tri, 0)[1], s.corner(tri, 0)[2]};
-    const uint32_t n = 1u << level;
     uint32_t xyz[3];
-    for (int k = 0; k < 3; ++k) {
-      const float cell = std::floor((p[k] - t.origin()[k]) / t.size() * float(n));
-      xyz[k] = uint32_t(std::clamp(cell, 0.0f, float(n - 1)));
-    }
+    corner_cell(t, s, tri, level, xyz);
     const detail::CellBox cb = r.box(level, xyz[0], xyz[1], xyz[2]);
     std::vector<uint32_t> list;
     s.triangles_near(p, cb.h * std::ldexp(1.0f, -2 - int(rng() % 6)), list);
