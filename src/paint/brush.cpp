@@ -28,10 +28,8 @@ bool finite_in(float v, float lo, float hi) {
 std::vector<uint32_t> all_triangles(const PaintSurface& s) {
   std::vector<uint32_t> v;
   v.reserve(s.triangle_count());
-  for (uint32_t t = 0; t < s.triangle_count(); ++t) {
-    const float* n = s.normal(t);
-    if (n[0] != 0 || n[1] != 0 || n[2] != 0) v.push_back(t);
-  }
+  for (uint32_t t = 0; t < s.triangle_count(); ++t)
+    if (!s.degenerate(t)) v.push_back(t);
   return v;
 }
 

@@ -113,10 +113,8 @@ constexpr std::array<std::array<uint64_t, 16>, 3> kReach = [] {
   std::array<std::array<uint64_t, 16>, 3> r{};
   for (int a = 0; a < 3; ++a)
     for (int mask = 0; mask < 16; ++mask)
-      for (int m = 0; m < 64; ++m) {
-        const int i = (m >> (3 + a) & 1) * 2 + (m >> a & 1);
-        if (mask >> i & 1) r[size_t(a)][size_t(mask)] |= uint64_t(1) << m;
-      }
+      for (int m = 0; m < 64; ++m)
+        if (mask >> Refiner::leaf_index(m, a) & 1) r[size_t(a)][size_t(mask)] |= uint64_t(1) << m;
   return r;
 }();
 
@@ -1025,8 +1023,7 @@ std::shared_ptr<const Refiner::StartLists> Refiner::start_lists() const {
     std::vector<std::pair<uint32_t, uint32_t>>& hits = parts[part];
     for (uint32_t t = uint32_t(part) * kTris; t < std::min(count, uint32_t(part + 1) * kTris);
          ++t) {
-      const float* nm = s_.normal(t);
-      if (nm[0] == 0 && nm[1] == 0 && nm[2] == 0) continue;
+      if (s_.degenerate(t)) continue;
       uint32_t lo[3], hi[3];
       for (int a = 0; a < 3; ++a) {
         double mn = INFINITY, mx = -INFINITY;

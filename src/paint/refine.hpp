@@ -163,7 +163,7 @@ class Refiner {
     l.h = float(0.5 * s);
     return l;
   }
-  static int leaf_index(int m, int a) { return (m >> (3 + a) & 1) * 2 + (m >> a & 1); }
+  static constexpr int leaf_index(int m, int a) { return (m >> (3 + a) & 1) * 2 + (m >> a & 1); }
   /// The box of leaf m: what child(child(bb, m >> 3), m & 7) gives.
   static CellBox leaf_box(const BrickLeaves& l, int m) {
     CellBox b;

@@ -213,16 +213,14 @@ struct BoxQuery {
 
 bool candidate_callback(RTCPointQueryFunctionArguments* args) {
   const BoxQuery& q = *static_cast<const BoxQuery*>(args->userPtr);
-  const float* n = q.s->normal(args->primID);
-  if (n[0] != 0 || n[1] != 0 || n[2] != 0) q.out->push_back(args->primID);
+  if (!q.s->degenerate(args->primID)) q.out->push_back(args->primID);
   return false;
 }
 
 bool box_callback(RTCPointQueryFunctionArguments* args) {
   const BoxQuery& q = *static_cast<const BoxQuery*>(args->userPtr);
   const uint32_t t = args->primID;
-  const float* n = q.s->normal(t);
-  if (n[0] == 0 && n[1] == 0 && n[2] == 0) return false;
+  if (q.s->degenerate(t)) return false;
   using paint_detail::v3;
   const paint_detail::V3 a = v3(q.s->corner(t, 0)), b = v3(q.s->corner(t, 1)),
                          d = v3(q.s->corner(t, 2));
@@ -333,10 +331,8 @@ void PaintSurface::triangles_near(const float c[3], float r, std::vector<uint32_
   RTCPointQueryContext ctx;
   rtcInitPointQueryContext(&ctx);
   rtcPointQuery(embree_->scene, &pq, &ctx, &gather_callback, &q);
-  auto it = std::remove_if(out.begin() + std::ptrdiff_t(first), out.end(), [&](uint32_t t) {
-    const float* n = normal(t);
-    return n[0] == 0 && n[1] == 0 && n[2] == 0;
-  });
+  auto it = std::remove_if(out.begin() + std::ptrdiff_t(first), out.end(),
+                           [&](uint32_t t) { return degenerate(t); });
   out.erase(it, out.end());
   sort_unique(out, first, triangle_count());
 }

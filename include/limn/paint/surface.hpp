@@ -57,6 +57,11 @@ class PaintSurface {
   const float* corner(uint32_t t, int k) const { return &corners_[9 * size_t(t) + 3 * size_t(k)]; }
   /// Unit normal of triangle t, (0,0,0) for a degenerate one. O(1).
   const float* normal(uint32_t t) const { return &normals_[3 * size_t(t)]; }
+  /// Whether triangle t is degenerate (no normal): the paint layer skips it everywhere. O(1).
+  bool degenerate(uint32_t t) const {
+    const float* n = normal(t);
+    return n[0] == 0 && n[1] == 0 && n[2] == 0;
+  }
   /// Face of the mesh that triangle t comes from. O(1).
   uint32_t face(uint32_t t) const { return faces_[t]; }
   /// octree::tag_for_normal of triangle t's normal, tabulated. O(1).
