@@ -8,10 +8,12 @@
 // software driver see only the submission). The error is measured as limn_bench_adaptive_depth
 // does (screen_error.hpp). OpenSubdiv's image is checked against limn's fixed-depth frame at the
 // same camera: their coverage masks agree on this share of the pixels either covers ("osd
-// agree"). On llvmpipe only the ratios mean something.
+// agree"). On llvmpipe only the ratios mean something. The last column: each draw's GPU time (a
+// timer query, median): on a real GPU what the frame costs the GPU alone; on llvmpipe little
+// more than the submission.
 //   limn_bench_render [--tolerance PX] [--resolution WxH] [--frames N] [--mesh FILE]...
 //                     [--shape NAME]... [--cameras near,mid,far] [--no-osd] [--profile]
-//                     [--fastest] [--osd-chunk N] [--zoom Z]...
+//                     [--fastest] [--osd-chunk N] [--zoom Z]... [--json FILE]
 // --zoom adds a camera at Z times the framing distance (label xZ; --cameras none: only those).
 // --mesh / --shape replace the default models (BigGuy, MonsterFrog); --shape takes limn's
 // procedural shapes (limn shape --help: terrain is the 801k-quad terrain). --profile adds, per
@@ -19,14 +21,16 @@
 // rasterisation (GL_RASTERIZER_DISCARD), and their triangles. --fastest reports each draw's
 // fastest frame instead of the median (on a machine shared with other work, the least disturbed).
 // --osd-chunk: patches per OpenSubdiv draw call (default: 32 on llvmpipe, as limn's drawer, else
-// whole patch arrays).
+// whole patch arrays). --json: the table's rows and the renderer, also as JSON (scripts/gpu-bench).
 #include <epoxy/gl.h>
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <memory>
 #include <string>
@@ -49,6 +53,7 @@ namespace {
 
 struct Frame {
   double ms = 0;
+  double gpu_ms = 0;  ///< the draw's GPU time (timer query; on llvmpipe only the submission)
   uint64_t triangles = 0;
   std::vector<uint8_t> mask;  ///< covered pixels of the last frame
 };
@@ -68,7 +73,11 @@ double agreement(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {
   return covered ? 1.0 - double(differ) / double(covered) : 1.0;
 }
 
-using Draw = std::function<uint64_t()>;  // draws one frame, returns the triangles drawn
+struct Drawn {
+  uint64_t triangles = 0;
+  double gpu_ms = 0;
+};
+using Draw = std::function<Drawn()>;  // draws one frame
 
 // Frame time of each draw (the median, or the fastest frame with `fastest`) after one warm-up
 // round (compiles and uploads). The draws take turns frame by frame, so that load from other
@@ -79,23 +88,28 @@ bool fastest = false;  // --fastest
 std::vector<Frame> time_frames(RenderTarget& target, int frames, const std::vector<Draw>& draws,
                                bool masks = false) {
   const float white[4] = {1, 1, 1, 1};
-  std::vector<std::vector<double>> ms(draws.size());
+  std::vector<std::vector<double>> ms(draws.size()), gpu(draws.size());
   std::vector<Frame> out(draws.size());
   for (int i = 0; i <= frames; ++i)
     for (size_t j = 0; j < draws.size(); ++j) {
       target.begin(white);
       target.finish();
       const auto t0 = std::chrono::steady_clock::now();
-      out[j].triangles = draws[j]();
+      const Drawn d = draws[j]();
       target.finish();
-      if (i > 0)
+      out[j].triangles = d.triangles;
+      if (i > 0) {
         ms[j].push_back(
             std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
                 .count());
+        gpu[j].push_back(d.gpu_ms);
+      }
     }
   for (size_t j = 0; j < draws.size(); ++j) {
     std::sort(ms[j].begin(), ms[j].end());
+    std::sort(gpu[j].begin(), gpu[j].end());
     out[j].ms = fastest ? ms[j][0] : ms[j][ms[j].size() / 2];
+    out[j].gpu_ms = fastest ? gpu[j][0] : gpu[j][gpu[j].size() / 2];
     if (masks) {
       target.begin(white);
       draws[j]();
@@ -113,9 +127,9 @@ Draw limn_draw(std::vector<std::unique_ptr<PatchDrawer>>& keep, const Mesh& cage
   PatchDrawer* d = keep.back().get();
   return [d, cam, discard] {
     if (discard) glEnable(GL_RASTERIZER_DISCARD);
-    const uint64_t n = d->draw(cam, DrawOptions{}).triangles;
+    const DrawStats st = d->draw(cam, DrawOptions{});
     if (discard) glDisable(GL_RASTERIZER_DISCARD);
-    return n;
+    return Drawn{st.triangles, st.gpu_ms};
   };
 }
 
@@ -171,6 +185,7 @@ int main(int argc, char** argv) {
   std::string cameras = "near,mid,far";
   std::vector<std::string> labels;  // extra camera stops (--zoom)
   std::vector<float> zooms;
+  std::string json_path;
   for (int i = 1; i < argc; ++i) {
     const bool more = i + 1 < argc;
     if (!std::strcmp(argv[i], "--tolerance") && more) tolerance = float(std::atof(argv[++i]));
@@ -184,6 +199,7 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--no-osd")) run_osd = false;
     if (!std::strcmp(argv[i], "--profile")) run_profile = true;
     if (!std::strcmp(argv[i], "--fastest")) fastest = true;
+    if (!std::strcmp(argv[i], "--json") && more) json_path = argv[++i];
     if (!std::strcmp(argv[i], "--osd-chunk") && more) osd_chunk = size_t(std::atoll(argv[++i]));
     if (!std::strcmp(argv[i], "--mesh") && more) {
       const fs::path p = argv[++i];
@@ -208,12 +224,20 @@ int main(int argc, char** argv) {
                                                                              : SIZE_MAX;
   fmt::print("renderer: {}, {}x{}, tolerance {} px, {} of {} frames\n\n", gl.renderer(), w, h,
              tolerance, fastest ? "fastest" : "median", frames);
+  nlohmann::json json = {{"renderer", gl.renderer()},
+                         {"resolution", {w, h}},
+                         {"tolerance_px", tolerance},
+                         {"frames", frames},
+                         {"statistic", fastest ? "fastest" : "median"},
+                         {"rows", nlohmann::json::array()}};
   fmt::print(
       "| model | camera | dynamic patches | dynamic err px | dynamic triangles | dynamic ms | "
       "fixed L | fixed patches | fixed err px | fixed triangles | fixed ms | osd patches | osd "
-      "triangles | osd ms | osd agree | fixed / dynamic | osd / dynamic |\n");
+      "triangles | osd ms | osd agree | fixed / dynamic | osd / dynamic | GPU ms dynamic / fixed / "
+      "osd |\n");
   fmt::print(
-      "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+      "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+      "\n");
   for (const Model& model : models) {
     const Mesh& cage = model.cage;
     PatchOptions po;
@@ -255,8 +279,11 @@ int main(int argc, char** argv) {
       std::unique_ptr<bench::OsdGlDrawer> osd;
       if (run_osd) {
         osd = std::make_unique<bench::OsdGlDrawer>(cage, L);
-        draws.push_back(
-            [&] { return osd->draw(cam, DrawOptions{}.pixels_per_segment, chunk).triangles; });
+        draws.push_back([&] {
+          const bench::OsdGlDrawer::Stats st =
+              osd->draw(cam, DrawOptions{}.pixels_per_segment, chunk);
+          return Drawn{st.triangles, st.gpu_ms};
+        });
       }
       const std::vector<Frame> f = time_frames(target, frames, draws, run_osd);
       const Frame &fd = f[0], &ff = f[1];
@@ -267,12 +294,36 @@ int main(int argc, char** argv) {
                                f[2].ms / fd.ms);
       fmt::print(
           "| {} | {} | {} | {:.3f} | {} | {:.1f} | {} | {} | {:.3f} | {} | {:.1f} | {} | {:.2f}x "
-          "| {} |\n",
+          "| {} | {:.2f} / {:.2f} / {} |\n",
           model.name, label, dyn.patch_count(), dyn_err, fd.triangles, fd.ms, L,
           fixed.patch_count(), fixed_err, ff.triangles, ff.ms,
           osd_cols.substr(0, osd_cols.rfind(" | ")), ff.ms / fd.ms,
-          osd_cols.substr(osd_cols.rfind(" | ") + 3));
+          osd_cols.substr(osd_cols.rfind(" | ") + 3), fd.gpu_ms, ff.gpu_ms,
+          run_osd ? fmt::format("{:.2f}", f[2].gpu_ms) : "-");
       std::fflush(stdout);
+      nlohmann::json row = {{"model", model.name},
+                            {"camera", label},
+                            {"dynamic",
+                             {{"patches", dyn.patch_count()},
+                              {"error_px", dyn_err},
+                              {"triangles", fd.triangles},
+                              {"ms", fd.ms},
+                              {"gpu_ms", fd.gpu_ms}}},
+                            {"fixed",
+                             {{"level", L},
+                              {"patches", fixed.patch_count()},
+                              {"error_px", fixed_err},
+                              {"triangles", ff.triangles},
+                              {"ms", ff.ms},
+                              {"gpu_ms", ff.gpu_ms}}}};
+      if (run_osd)
+        row["osd"] = {{"patches", osd->stats().patches},
+                      {"triangles", f[2].triangles},
+                      {"ms", f[2].ms},
+                      {"gpu_ms", f[2].gpu_ms},
+                      {"coverage_agreement", agreement(f[2].mask, ff.mask)}};
+      json["rows"].push_back(row);
+      if (!json_path.empty()) std::ofstream(json_path) << json.dump(2) << "\n";
       if (run_profile) {
         profile("dynamic", cage, dyn, hpoints, cam, target, frames);
         profile("fixed", cage, fixed, fpoints, cam, target, frames);

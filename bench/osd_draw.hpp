@@ -45,6 +45,7 @@ class OsdGlDrawer {
   struct Stats {
     size_t patches = 0, regular = 0, gregory = 0;
     uint64_t triangles = 0;
+    double gpu_ms = 0;  ///< the draw's GPU time (a timer query)
   };
 
   /// Far's adaptive table of `cage` at isolation `level` (single-crease patches only where the
@@ -94,10 +95,12 @@ class OsdGlDrawer {
     }
     stats_.patches = stats_.regular + stats_.gregory;
     glCreateQueries(GL_PRIMITIVES_GENERATED, 1, &query_);
+    glCreateQueries(GL_TIME_ELAPSED, 1, &timer_);
   }
   ~OsdGlDrawer() {
     glDeleteVertexArrays(1, &vao_);
     glDeleteQueries(1, &query_);
+    glDeleteQueries(1, &timer_);
   }
   OsdGlDrawer(const OsdGlDrawer&) = delete;
   OsdGlDrawer& operator=(const OsdGlDrawer&) = delete;
@@ -115,6 +118,7 @@ class OsdGlDrawer {
     glBindVertexArray(vao_);
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_BUFFER, table_->GetPatchParamTextureBuffer());
+    glBeginQuery(GL_TIME_ELAPSED, timer_);
     glBeginQuery(GL_PRIMITIVES_GENERATED, query_);
     for (const osd::Osd::PatchArray& a : table_->GetPatchArrays()) {
       const GLuint prog = programs_[slot(a.GetDescriptor().GetType())].get();
@@ -137,13 +141,16 @@ class OsdGlDrawer {
       }
     }
     glEndQuery(GL_PRIMITIVES_GENERATED);
-    GLuint64 prims = 0;
+    glEndQuery(GL_TIME_ELAPSED);
+    GLuint64 prims = 0, ns = 0;
     glGetQueryObjectui64v(query_, GL_QUERY_RESULT, &prims);
+    glGetQueryObjectui64v(timer_, GL_QUERY_RESULT, &ns);
     glBindVertexArray(0);
     glUseProgram(0);
     gl::check("OsdGlDrawer::draw");
     Stats s = stats_;
     s.triangles = prims;
+    s.gpu_ms = double(ns) * 1e-6;
     return s;
   }
 
@@ -208,7 +215,7 @@ void main() {
   std::unique_ptr<osd::Osd::GLVertexBuffer> vertices_;
   std::unique_ptr<osd::Osd::GLPatchTable> table_;
   gl::Program programs_[2];
-  GLuint vao_ = 0, query_ = 0;
+  GLuint vao_ = 0, query_ = 0, timer_ = 0;
   Stats stats_;
 };
 

@@ -520,9 +520,17 @@ GpuOctreeTexture::Lookups GpuOctreeTexture::lookup(std::span<const float> p,
   glUniform1ui(glGetUniformLocation(prog, "count"), GLuint(count));
   glUniform1i(glGetUniformLocation(prog, "has_normals"), !n.empty());
   glUniform1f(glGetUniformLocation(prog, "footprint"), footprint);
+  GLuint query = 0;
+  glCreateQueries(GL_TIME_ELAPSED, 1, &query);
+  const gl::Query timer(query);
+  glBeginQuery(GL_TIME_ELAPSED, query);
   glDispatchCompute(GLuint((count + 63) / 64), 1, 1);
+  glEndQuery(GL_TIME_ELAPSED);
   glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
   glGetNamedBufferSubData(res_buf.get(), 0, GLsizeiptr(res.size() * 4), res.data());
+  GLuint64 ns = 0;
+  glGetQueryObjectui64v(query, GL_QUERY_RESULT, &ns);
+  out.shader_ms = double(ns) * 1e-6;
   glUseProgram(0);
   gl::check("GpuOctreeTexture::lookup");
   for (size_t i = 0; i < count; ++i) {

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "draw_ranges.hpp"
 #include "gl_util.hpp"
 #include "limn/mesh/morton.hpp"
 #include "limn/mesh/topology.hpp"
@@ -464,6 +465,7 @@ struct PatchDrawer::Impl {
   std::vector<float> rates;
   RateScratch rate_scratch;
   std::vector<uint32_t> patch_face;  // cage face of each patch (regular, then end caps)
+  std::vector<DrawRange> ranges;     // this pass's draw calls
   Box bounds;
   // Patches per draw call. llvmpipe (Mesa 22.3) mixes up the tessellation of patches whose
   // levels differ once a draw holds more than about 60 patches (every patch still evaluated, but
@@ -650,23 +652,11 @@ DrawStats PatchDrawer::draw(const Camera& camera, const DrawOptions& o) {
     glUniform3fv(glGetUniformLocation(prog, "ramp"), 17, ramp);
     if (o.texture) o.texture->bind(prog, o.texture_nearest ? 1 : 2);
     glPatchParameteri(GL_PATCH_VERTICES, cvs);
-    // Patches whose faces are all out of view are left out: the runs of patches of faces that
-    // may be seen (gaps of up to kCullGap patches drawn through) are drawn in draws of at most
-    // m.chunk patches.
-    const uint32_t* face = m.patch_face.data() + (pass ? m.regular : 0);
-    const std::vector<uint8_t>& seen = m.rate_scratch.face_seen;
-    size_t begin = 0, end = 0;  // the run of patches to draw, not yet drawn
-    auto flush = [&] {
-      for (size_t first = begin; first < end; first += m.chunk)
-        glDrawArrays(GL_PATCHES, GLint(first * size_t(cvs)),
-                     GLsizei(std::min(m.chunk, end - first) * size_t(cvs)));
-    };
-    for (size_t p = 0; p < count; ++p) {
-      if (!seen[face[p]]) continue;
-      if (end == 0 || p > end + kCullGap) flush(), begin = p;
-      end = p + 1;
-    }
-    flush();
+    // Patches whose faces are all out of view are left out.
+    const std::span<const uint32_t> faces(m.patch_face.data() + (pass ? m.regular : 0), count);
+    patch_draw_ranges(faces, m.rate_scratch.face_seen, kCullGap, m.chunk, m.ranges);
+    for (const DrawRange& r : m.ranges)
+      glDrawArrays(GL_PATCHES, GLint(r.first * size_t(cvs)), GLsizei(r.count * size_t(cvs)));
   }
   const auto [ns, prims] = m.queries.end();
   glBindVertexArray(0);

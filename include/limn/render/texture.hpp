@@ -42,6 +42,9 @@ class GpuOctreeTexture {
     std::vector<uint8_t> nearest_found;
     std::vector<float> filtered;  ///< 4 floats per point, OctreeSampler::filtered's rgba
     std::vector<uint8_t> filtered_found;
+    /// The compute dispatch's time on the GPU (a timer query), without the transfers; on a
+    /// software driver it covers little more than the submission.
+    double shader_ms = 0;
   };
   Lookups lookup(std::span<const float> p, std::span<const float> n, float footprint) const;
 
