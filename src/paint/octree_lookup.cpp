@@ -7,10 +7,12 @@
 #include <cmath>
 #include <cstdlib>
 
-#include <cpuid.h>
-#include <immintrin.h>
-
+#include "core/cpu.hpp"
 #include "octree_blocks.hpp"
+
+#if LIMN_X86_SIMD
+#include <immintrin.h>
+#endif
 
 namespace limn {
 
@@ -37,7 +39,7 @@ inline int side_of(uint32_t tag, const float* n) {
 }
 
 // The instruction set of the walk's fast variant (see LIMN_WALK below).
-#define LIMN_FAST_TARGET __attribute__((target("popcnt,sse4.1,sse4.2,bmi,bmi2,lzcnt,avx,avx2")))
+#define LIMN_FAST_TARGET LIMN_TARGET("popcnt,sse4.1,sse4.2,bmi,bmi2,lzcnt,avx,avx2")
 
 using F4 = float __attribute__((vector_size(16)));
 using U4 = uint32_t __attribute__((vector_size(16)));
@@ -60,11 +62,13 @@ inline uint32_t back_tags(const float* n) {
   for (int q = 0; q < 4; ++q) {
     // The sum in side_of's order, lane by lane.
     const F4 dot = kTagLanes.d[0][q] * n[0] + kTagLanes.d[1][q] * n[1] + kTagLanes.d[2][q] * n[2];
-    back |= uint32_t(_mm_movemask_ps(__m128(!(dot >= 0)))) << (4 * q);
+    const I4 m = !(dot >= 0);  // all ones where set
+    for (int l = 0; l < 4; ++l) back |= (uint32_t(m[l]) & 1u) << (4 * q + l);
   }
   return back & ~1u;  // tag 0: no direction, seen from everywhere
 }
 
+#if LIMN_X86_SIMD
 // back_tags with the 16 tags in two AVX vectors (the same float operations, lane by lane).
 LIMN_FAST_TARGET inline uint32_t back_tags_avx(const float* n) {
   if (!n) return 0;
@@ -83,6 +87,7 @@ LIMN_FAST_TARGET inline uint32_t back_tags_avx(const float* n) {
   }
   return back & ~1u;
 }
+#endif
 
 inline uint32_t octant(uint32_t x, uint32_t y, uint32_t z, int shift) {
   return (x >> shift & 1u) | (y >> shift & 1u) << 1 | (z >> shift & 1u) << 2;
@@ -368,6 +373,7 @@ LIMN_WALK uint32_t slot_taps(const Cache& cache, uint32_t slot, const uint32_t m
   return found;
 }
 
+#if LIMN_X86_SIMD
 // The accumulation of walk_trilinear (below) with the 8 taps in the lanes of AVX vectors: each
 // lane does one tap's float operations in the same order (w in double, then float(w), its
 // alpha as float(a) / 255, fw * a * channel / 255), and the sums run in corner order, so the
@@ -475,6 +481,7 @@ LIMN_FAST_TARGET inline int table_trilinear_avx(const Cache& cache, const uint32
       uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_slli_epi32(has, 31))));
   return accumulate8_avx(wt, found, col, acc);
 }
+#endif  // LIMN_X86_SIMD
 
 // The 8 leaf-level taps of a filtered lookup, accumulated premultiplied (acc: rgb, alpha,
 // weight). `deepest` rises to the level of a finer leaf whose sample a tap read, `reach` to the
@@ -522,9 +529,11 @@ LIMN_WALK bool walk_trilinear(const uint32_t* pool, const OctreeIndex* index, Ca
     for (int corner = 0; corner < 8; ++corner) walk_tap(corner);
   } else {
     uint32_t back;
+#if LIMN_X86_SIMD
     if constexpr (kAvx)
       back = back_tags_avx(n);
     else
+#endif
       back = back_tags(n);
     // Per axis, each tap cell's Morton bits in its brick, its brick cell's key bits, and its
     // slot's bits in a brick table entry with the cell's own Morton bits.
@@ -545,12 +554,15 @@ LIMN_WALK bool walk_trilinear(const uint32_t* pool, const OctreeIndex* index, Ca
     bool all = inside;
     if (inside) {
       const uint64_t lk = brick_key(level - 2, 0, 0, 0) | kUnpacked;
+#if LIMN_X86_SIMD
       if constexpr (kAvx) {
         const int r = table_trilinear_avx(cache, entry, keys, lk, back, wt, acc);
         all = r >= 0;
         count_table_hit(cache, all);
         if (all) return r;
-      } else {
+      } else
+#endif
+      {
         uint32_t e[8];
 #pragma GCC unroll 8
         for (int corner = 0; corner < 8; ++corner) {
@@ -626,7 +638,9 @@ LIMN_WALK bool walk_trilinear(const uint32_t* pool, const OctreeIndex* index, Ca
           }
         }
   }
+#if LIMN_X86_SIMD
   if constexpr (kAvx) return accumulate8_avx(wt, found, col, acc);
+#endif
   F4 sum = {acc[0], acc[1], acc[2], acc[3]};
   float weight = acc[4];
   bool any = false;
@@ -652,12 +666,6 @@ LIMN_WALK bool walk_trilinear(const uint32_t* pool, const OctreeIndex* index, Ca
   for (int k = 0; k < 4; ++k) acc[k] = sum[k];
   acc[4] = weight;
   return any;
-}
-
-LIMN_FAST_TARGET bool walk_trilinear_fast(const uint32_t* pool, const OctreeIndex* index,
-                                          Cache& cache, const double u[3], int level,
-                                          const float* n, float acc[5], int& deepest, int& reach) {
-  return walk_trilinear<true>(pool, index, cache, u, level, n, acc, deepest, reach);
 }
 
 bool walk_trilinear_generic(const uint32_t* pool, const OctreeIndex* index, Cache& cache,
@@ -710,23 +718,10 @@ LIMN_WALK int walk_filtered(const uint32_t* pool, const OctreeIndex* index, Cach
   }
 }
 
-LIMN_FAST_TARGET int walk_filtered_fast(const uint32_t* pool, const OctreeIndex* index,
-                                        Cache& cache, const uint32_t c[3], const double u[3],
-                                        const float* n, float footprint, double size,
-                                        int& leaf_level, float acc[5]) {
-  return walk_filtered<true>(pool, index, cache, c, u, n, footprint, size, leaf_level, acc);
-}
-
 int walk_filtered_generic(const uint32_t* pool, const OctreeIndex* index, Cache& cache,
                           const uint32_t c[3], const double u[3], const float* n, float footprint,
                           double size, int& leaf_level, float acc[5]) {
   return walk_filtered<false>(pool, index, cache, c, u, n, footprint, size, leaf_level, acc);
-}
-
-LIMN_FAST_TARGET bool walk_nearest_fast(const uint32_t* pool, const OctreeIndex* index,
-                                        Cache& cache, uint32_t x, uint32_t y, uint32_t z,
-                                        const float* n, Rgba8& out, int* level) {
-  return walk_nearest(pool, index, cache, x, y, z, n, out, level);
 }
 
 bool walk_nearest_generic(const uint32_t* pool, const OctreeIndex* index, Cache& cache, uint32_t x,
@@ -734,16 +729,37 @@ bool walk_nearest_generic(const uint32_t* pool, const OctreeIndex* index, Cache&
   return walk_nearest(pool, index, cache, x, y, z, n, out, level);
 }
 
-// LZCNT (ABM) is CPUID 0x80000001 ECX bit 5; clang's __builtin_cpu_supports has no name for it.
-bool has_lzcnt() {
-  unsigned a = 0, b = 0, c = 0, d = 0;
-  return __get_cpuid(0x80000001u, &a, &b, &c, &d) && (c >> 5 & 1u);
+// The walks compiled for the fast variant's instruction set (LIMN_FAST_TARGET), taken where
+// cpu::features() says the processor has it; without the x86 kernels, the plain walks.
+#if LIMN_X86_SIMD
+LIMN_FAST_TARGET bool walk_trilinear_fast(const uint32_t* pool, const OctreeIndex* index,
+                                          Cache& cache, const double u[3], int level,
+                                          const float* n, float acc[5], int& deepest, int& reach) {
+  return walk_trilinear<true>(pool, index, cache, u, level, n, acc, deepest, reach);
 }
 
-// LIMN_NO_SIMD=1 in the environment takes the plain walk anywhere (its tests).
-const bool kFast = __builtin_cpu_supports("popcnt") && __builtin_cpu_supports("avx2") &&
-                   __builtin_cpu_supports("bmi") && __builtin_cpu_supports("bmi2") && has_lzcnt() &&
-                   !std::getenv("LIMN_NO_SIMD");
+LIMN_FAST_TARGET int walk_filtered_fast(const uint32_t* pool, const OctreeIndex* index,
+                                        Cache& cache, const uint32_t c[3], const double u[3],
+                                        const float* n, float footprint, double size,
+                                        int& leaf_level, float acc[5]) {
+  return walk_filtered<true>(pool, index, cache, c, u, n, footprint, size, leaf_level, acc);
+}
+
+LIMN_FAST_TARGET bool walk_nearest_fast(const uint32_t* pool, const OctreeIndex* index,
+                                        Cache& cache, uint32_t x, uint32_t y, uint32_t z,
+                                        const float* n, Rgba8& out, int* level) {
+  return walk_nearest(pool, index, cache, x, y, z, n, out, level);
+}
+#else
+constexpr auto walk_trilinear_fast = walk_trilinear_generic;
+constexpr auto walk_filtered_fast = walk_filtered_generic;
+constexpr auto walk_nearest_fast = walk_nearest_generic;
+#endif
+
+// Whether lookups take the fast walks (LIMN_NO_SIMD=1 in the environment: the plain ones).
+inline bool fast_walk() {
+  return cpu::features().avx2_bits;
+}
 
 }  // namespace
 
@@ -798,8 +814,8 @@ bool OctreeSampler::nearest_at(uint32_t x, uint32_t y, uint32_t z, const float* 
                                int* level) {
   out = t_->background();
   const uint32_t* pool = t_->words().data();
-  return kFast ? walk_nearest_fast(pool, index_, cache_, x, y, z, n, out, level)
-               : walk_nearest_generic(pool, index_, cache_, x, y, z, n, out, level);
+  return fast_walk() ? walk_nearest_fast(pool, index_, cache_, x, y, z, n, out, level)
+                     : walk_nearest_generic(pool, index_, cache_, x, y, z, n, out, level);
 }
 
 bool OctreeSampler::nearest(const float p[3], const float* n, Rgba8& out, int* level) {
@@ -893,8 +909,9 @@ bool OctreeSampler::trilinear(const double u[3], int level, const float* n, bool
   const uint32_t* pool = t_->words().data();
   if (!averages) {
     int deepest = level, reach = level;
-    return kFast ? walk_trilinear_fast(pool, index_, cache_, u, level, n, acc, deepest, reach)
-                 : walk_trilinear_generic(pool, index_, cache_, u, level, n, acc, deepest, reach);
+    return fast_walk()
+               ? walk_trilinear_fast(pool, index_, cache_, u, level, n, acc, deepest, reach)
+               : walk_trilinear_generic(pool, index_, cache_, u, level, n, acc, deepest, reach);
   }
   // Mip levels (node averages): not the hot path.
   const double cells = double(1u << level);
@@ -950,7 +967,7 @@ bool OctreeSampler::filtered(const float p[3], const float* n, float footprint, 
   const uint32_t* pool = t_->words().data();
   const double size = double(t_->size());
   int at_leaf =
-      kFast
+      fast_walk()
           ? walk_filtered_fast(pool, index_, cache_, c, u, n, footprint, size, leaf_level, acc)
           : walk_filtered_generic(pool, index_, cache_, c, u, n, footprint, size, leaf_level, acc);
   bool any = at_leaf > 0;

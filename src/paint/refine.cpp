@@ -15,6 +15,8 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include "core/cpu.hpp"
+
 namespace limn::detail {
 
 using namespace paint_detail;
@@ -87,11 +89,10 @@ __attribute__((always_inline)) inline void split_loop(const PaintSurface& s,
   }
 }
 
-__attribute__((target("avx2"))) void split_loop_avx2(const PaintSurface& s,
-                                                     std::span<const uint32_t> in, V3 c,
-                                                     const float* kx, const float* ky,
-                                                     const float* kz, float kh, float slack,
-                                                     uint32_t want, Refiner::Split& out) {
+LIMN_TARGET("avx2")
+void split_loop_avx2(const PaintSurface& s, std::span<const uint32_t> in, V3 c, const float* kx,
+                     const float* ky, const float* kz, float kh, float slack, uint32_t want,
+                     Refiner::Split& out) {
   split_loop(s, in, c, kx, ky, kz, kh, slack, want, out);
 }
 
@@ -100,8 +101,6 @@ void split_loop_generic(const PaintSurface& s, std::span<const uint32_t> in, V3 
                         Refiner::Split& out) {
   split_loop(s, in, c, kx, ky, kz, kh, slack, want, out);
 }
-
-const bool kAvx2 = __builtin_cpu_supports("avx2");
 
 }  // namespace
 
@@ -156,11 +155,10 @@ __attribute__((always_inline)) inline void leaf_masks_loop(
   }
 }
 
-__attribute__((target("avx2"))) void leaf_masks_avx2(const PaintSurface& s,
-                                                     std::span<const uint32_t> in, V3 o,
-                                                     const float (&off)[3][4],
-                                                     const float (&lanes)[3][64], float h,
-                                                     float slack, uint64_t want, uint64_t* masks) {
+LIMN_TARGET("avx2")
+void leaf_masks_avx2(const PaintSurface& s, std::span<const uint32_t> in, V3 o,
+                     const float (&off)[3][4], const float (&lanes)[3][64], float h, float slack,
+                     uint64_t want, uint64_t* masks) {
   leaf_masks_loop(s, in, o, off, lanes, h, slack, want, masks);
 }
 
@@ -187,7 +185,7 @@ void Refiner::leaf_masks(std::span<const uint32_t> in, const CellBox& bb, const 
       for (int c2 = 0; c2 < 8; ++c2) lanes[a][8 * g + uint32_t(c2)] = (c2 >> a & 1) ? hi : lo;
     }
   }
-  if (kAvx2)
+  if (cpu::features().avx2)
     leaf_masks_avx2(s_, in, bb.c, off, lanes, l.h, slack_, want, masks.data());
   else
     leaf_masks_generic(s_, in, bb.c, off, lanes, l.h, slack_, want, masks.data());
@@ -245,7 +243,7 @@ void Refiner::split(std::span<const uint32_t> in, const CellBox& b, const CellBo
     kx[c] = k.c.x, ky[c] = k.c.y, kz[c] = k.c.z, kh = k.h;
     out[size_t(c)].clear();
   }
-  if (kAvx2)
+  if (cpu::features().avx2)
     split_loop_avx2(s_, in, b.c, kx, ky, kz, kh, slack_, want, out);
   else
     split_loop_generic(s_, in, b.c, kx, ky, kz, kh, slack_, want, out);

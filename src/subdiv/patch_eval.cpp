@@ -3,13 +3,16 @@
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
-#include <immintrin.h>
-
 #include <algorithm>
 #include <cmath>
 
+#include "core/cpu.hpp"
 #include "limn/mesh/topology.hpp"
 #include "limn/subdiv/patches.hpp"
+
+#if LIMN_X86_SIMD
+#include <immintrin.h>
+#endif
 
 namespace limn {
 
@@ -194,10 +197,12 @@ inline void eval_plain(const uint32_t* cv, float s, float t, float scale, const 
   }
 }
 
+constexpr int kLanes = 8;  // points per block of the AVX2 kernels
+
+#if LIMN_X86_SIMD
 // Up to 8 points of one regular (non-crease) patch at once, AVX2 lanes across the points: the
 // 16 control points read once per block, each basis weight a vector over the points. Boundary
 // folding is the same for every point, so it is done on the weight vectors.
-constexpr int kLanes = 8;
 
 // The cubic B-spline basis and its derivative, lane by lane.
 __attribute__((target("avx2,fma"), always_inline)) inline void basis_avx2(__m256 a, __m256 w[4],
@@ -378,6 +383,8 @@ __attribute__((target("avx2,fma"))) void block_gregory_avx2(const uint32_t* cv, 
   store_lanes_avx2(p, pu, pv, o3, scale, idx, n, pos, du_out, dv_out);
 }
 
+#endif  // LIMN_X86_SIMD
+
 // One point of any patch, the scalar way.
 void eval_point(const PatchTable& table, const float* pts, const PatchCoord& c, const PatchParam& p,
                 float* pos, float* du, float* dv) {
@@ -398,15 +405,6 @@ void eval_point(const PatchTable& table, const float* pts, const PatchCoord& c, 
     if (du) du[k] = float(e.du[k] * scale);
     if (dv) dv[k] = float(e.dv[k] * scale);
   }
-}
-
-// Asked on first use, not in a static initialiser (which may run before libgcc's CPU probe).
-bool have_avx2() {
-  static const bool yes = [] {
-    __builtin_cpu_init();
-    return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-  }();
-  return yes;
 }
 
 }  // namespace
@@ -476,10 +474,10 @@ void evaluate_patches(const PatchTable& table, std::span<const float> points,
   // isolated around an extraordinary vertex meets each of its patches in short runs, row after
   // row).
   constexpr size_t kWindow = 64;
-  const bool avx2 = have_avx2();
+  const bool avx2 = cpu::features().avx2_fma;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, coords.size(), 1024), [&](const auto& range) {
     uint32_t group_patch[kWindow], group_size[kWindow];
-    size_t members[kWindow][kWindow];
+    [[maybe_unused]] size_t members[kWindow][kWindow];  // read by the AVX2 kernel alone
     for (size_t w = range.begin(); w < range.end(); w += kWindow) {
       const size_t we = std::min(range.end(), w + kWindow);
       size_t groups = 0, last = 0;
@@ -500,6 +498,7 @@ void evaluate_patches(const PatchTable& table, std::span<const float> points,
         eval_point(table, points.data(), c, p, position + 3 * i, du ? du + 3 * i : nullptr,
                    dv ? dv + 3 * i : nullptr);
       }
+#if LIMN_X86_SIMD  // else no groups: avx2 is false
       for (size_t g = 0; g < groups; ++g) {
         const uint32_t patch = group_patch[g];
         const PatchParam& p = table.regular_params[patch];
@@ -515,6 +514,7 @@ void evaluate_patches(const PatchTable& table, std::span<const float> points,
                              points.data(), position, du, dv);
         }
       }
+#endif
     }
   });
 }
@@ -535,7 +535,7 @@ void evaluate_grids(const PatchTable& table, std::span<const float> points, int 
     const uint64_t end = (uint64_t(o) + 1) * m;         // i 2^d < end, or the last point
     hi = o + 1 == cells ? uint32_t(m) : uint32_t((end - 1) >> d);
   };
-  const bool avx2 = have_avx2();
+  const bool avx2 = cpu::features().avx2_fma;
   // One patch's grid points; sv, tv, idx: a block's lanes.
   auto one_patch = [&](size_t patch, float* sv, float* tv, size_t* idx) {
     const bool regular = patch < nr;
@@ -544,17 +544,19 @@ void evaluate_grids(const PatchTable& table, std::span<const float> points, int 
     range(p.u, p.depth, i0, i1), range(p.v, p.depth, j0, j1);
     const float cells = float(1u << p.depth), inv = 1.0f / float(m);
     const bool block = avx2 && (regular ? p.type == PatchType::regular : true);
-    const uint32_t* cv =
+    [[maybe_unused]] const uint32_t* cv =
         regular ? &table.regular_points[16 * patch] : &table.gregory_points[20 * (patch - nr)];
     int lanes = 0;
     auto flush = [&] {
       if (lanes == 0) return;
       for (int l = lanes; l < kLanes; ++l) sv[l] = sv[0], tv[l] = tv[0];
+#if LIMN_X86_SIMD  // else never a block: avx2 is false
       if (regular)
         block_regular_avx2(cv, p.boundary, sv, tv, idx, lanes, cells, points.data(), position, du,
                            dv);
       else
         block_gregory_avx2(cv, sv, tv, idx, lanes, cells, points.data(), position, du, dv);
+#endif
       lanes = 0;
     };
     for (uint32_t j = j0; j <= j1; ++j)  // empty where the patch holds no grid line

@@ -33,9 +33,10 @@
 #include <span>
 #include <stdexcept>
 
+#include "core/cpu.hpp"
 #include "limn/mesh/topology.hpp"
 
-#if defined(__x86_64__) && defined(__GNUC__)
+#if LIMN_X86_SIMD
 #include <immintrin.h>
 #endif
 
@@ -1152,8 +1153,7 @@ Adj cage_level(const Mesh& cage, const SubdivOptions& o, RefinedLevel& L0) {
 
 namespace {
 
-#if defined(__x86_64__) && defined(__GNUC__)
-#define LIMN_X86_DISPATCH 1
+#if LIMN_X86_SIMD
 // Three channels in one 4-wide double vector: one fused multiply-add per stencil entry, and
 // the sum stays in double (a valence-360 vertex sums ~1000 terms). Chosen at run time, so the
 // library still runs on x86-64 processors without AVX2.
@@ -1189,8 +1189,6 @@ __attribute__((target("avx2,fma"))) void apply3_avx2(const StencilTable& t, size
     o[2] = _mm_cvtss_f32(_mm_movehl_ps(r, r));
   }
 }
-#else
-#define LIMN_X86_DISPATCH 0
 #endif
 
 // Applies stencils [b, e) serially; out gets table.size() points.
@@ -1201,9 +1199,8 @@ void apply_serial(const StencilTable& table, size_t b, size_t e, const float* in
   // Sums in double: a valence-360 vertex sums ~1000 terms, and float accumulation alone would
   // cost ~1e-6 of the model's size per level.
   if (channels == 3) {
-#if LIMN_X86_DISPATCH
-    static const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-    if (avx2) return apply3_avx2(table, b, e, in, out);
+#if LIMN_X86_SIMD
+    if (cpu::features().avx2_fma) return apply3_avx2(table, b, e, in, out);
 #endif
     for (size_t i = b; i < e; ++i) {
       const uint32_t* idx = table.indices.data() + off[i];
