@@ -191,18 +191,4 @@ std::array<float, 16> view_projection(const Camera& c, const Box& bounds) {
   return out;
 }
 
-const char* const kShadeGlsl = R"(
-vec3 shade(vec3 base, vec3 pos, vec3 nrm, vec3 eye, float edge, bool outline) {
-  vec3 v = normalize(eye - pos);
-  vec3 n = normalize(nrm);
-  if (dot(n, v) < 0.0) n = -n;  // two-sided: open surfaces and inverted cages look right
-  float diff = max(dot(n, v), 0.0);
-  vec3 h = normalize(v + vec3(0.3, 0.5, 0.0));
-  float spec = pow(max(dot(n, h), 0.0), 40.0);
-  vec3 c = base * (0.18 + 0.82 * diff) + vec3(0.18 * spec);
-  if (outline) c = mix(vec3(0.06), c, smoothstep(0.6, 1.6, edge));
-  return c;
-}
-)";
-
 }  // namespace limn::gl

@@ -85,16 +85,4 @@ std::array<float, 16> view_projection(const Camera& camera, const Box& bounds);
 void view_and_projection(const Camera& camera, const Box& bounds, std::array<float, 16>& view,
                          std::array<float, 16>& projection);
 
-/// The GLSL shading shared by the patch and mesh programs: two-sided Blinn-Phong under a head
-/// light, with an optional outline where `edge` (0 on an edge, growing inwards) is small.
-extern const char* const kShadeGlsl;
-
-/// The octree texture lookup in GLSL (octree_texture.cpp): `vec3 oct_paint(base, pos, nrm)`,
-/// a no-op unless a GpuOctreeTexture is bound to the program.
-extern const char* const kOctreeGlsl;
-/// The same function without a texture (returns `base`): what programs drawn without a texture
-/// compile instead, since llvmpipe runs both sides of a branch on a uniform with lanes masked
-/// off, so the whole octree walk (in double precision) would cost every fragment.
-extern const char* const kNoOctreeGlsl;
-
 }  // namespace limn::gl

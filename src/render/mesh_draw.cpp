@@ -9,52 +9,11 @@
 
 #include "gl_util.hpp"
 #include "limn/render/draw.hpp"
+#include "shaders.hpp"
 
 namespace limn {
 
 namespace {
-
-constexpr const char* kVertex = R"(#version 450 core
-layout(location = 0) in vec3 pos;
-layout(location = 1) in vec3 nrm;
-layout(location = 2) in vec3 col;
-layout(location = 3) in vec3 bary;
-uniform mat4 view_proj;
-out vec3 t_pos;
-out vec3 t_nrm;
-out vec3 t_col;
-out vec3 t_bary;
-void main() {
-  t_pos = pos;
-  t_nrm = nrm;
-  t_col = col;
-  t_bary = bary;
-  gl_Position = view_proj * vec4(pos, 1.0);
-}
-)";
-
-constexpr const char* kFragment = R"(
-in vec3 t_pos;
-in vec3 t_nrm;
-in vec3 t_col;
-in vec3 t_bary;
-uniform vec3 eye;
-out vec4 frag;
-// Compiled in, not a uniform: llvmpipe runs both sides of a branch on a uniform.
-#ifdef OUTLINE
-const bool outline = true;
-#else
-const bool outline = false;
-#endif
-void main() {
-  float edge = 1e9;
-  if (outline) {
-    vec3 d = t_bary / max(fwidth(t_bary), vec3(1e-9));
-    edge = min(d.x, min(d.y, d.z));
-  }
-  frag = vec4(shade(oct_paint(t_col, t_pos, t_nrm), t_pos, t_nrm, eye, edge, outline), 1.0);
-}
-)";
 
 // Per corner: position, normal, colour, and barycentrics whose component for an edge inside a
 // polygon (a diagonal of its triangulation) is lifted by 1, so only polygon edges are outlined.
@@ -203,9 +162,10 @@ DrawStats MeshDrawer::draw(const Camera& camera, const DrawOptions& o) {
   gl::Program& program = m.programs[size_t((o.texture ? 1 : 0) | (o.outline ? 2 : 0))];
   if (!program.get()) {
     const std::string fs = std::string("#version 450 core\n") +
-                           (o.outline ? "#define OUTLINE\n" : "") + gl::kShadeGlsl +
-                           (o.texture ? gl::kOctreeGlsl : gl::kNoOctreeGlsl) + kFragment;
-    program = gl::program("mesh", {{GL_VERTEX_SHADER, kVertex}, {GL_FRAGMENT_SHADER, fs}});
+                           (o.outline ? "#define OUTLINE\n" : "") + shaders::shade +
+                           (o.texture ? shaders::octree : shaders::no_octree) + shaders::mesh_frag;
+    program =
+        gl::program("mesh", {{GL_VERTEX_SHADER, shaders::mesh_vert}, {GL_FRAGMENT_SHADER, fs}});
   }
   const GLuint prog = program.get();
   glEnable(GL_DEPTH_TEST);

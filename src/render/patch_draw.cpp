@@ -17,6 +17,7 @@
 #include "limn/mesh/topology.hpp"
 #include "limn/render/draw.hpp"
 #include "limn/subdiv/tessellate.hpp"
+#include "shaders.hpp"
 
 namespace limn {
 
@@ -32,243 +33,6 @@ struct PatchInfo {
   uint32_t pad[2];
 };
 static_assert(sizeof(PatchInfo) == 32);
-
-constexpr const char* kVertex = R"(
-layout(std430, binding = 0) readonly buffer Points { float pts[]; };
-layout(std430, binding = 1) readonly buffer Cvs { uint cvs[]; };
-uniform uint patch_base;
-out vec3 v_pos;
-flat out uint v_patch;
-void main() {
-  // The patch comes from the vertex index: gl_PrimitiveID restarts every 1024 patch vertices on
-  // llvmpipe.
-  uint i = uint(gl_VertexID);
-  uint p = cvs[i];
-  v_pos = vec3(pts[3u * p], pts[3u * p + 1u], pts[3u * p + 2u]);
-  v_patch = patch_base + i / uint(CVS);
-}
-)";
-
-constexpr const char* kInfo = R"(
-struct Info { uvec4 keys; uint bits; float sharpness; uint pad0, pad1; };
-layout(std430, binding = 2) readonly buffer Infos { Info info[]; };
-)";
-
-constexpr const char* kControl = R"(
-layout(vertices = CVS) out;
-in vec3 v_pos[];
-flat in uint v_patch[];
-out vec3 c_pos[];
-// The patch travels with every control point: llvmpipe mixes up per-patch outputs ("patch out")
-// between patches in large draws, as it does gl_PrimitiveID.
-flat out uint c_patch[];
-layout(std430, binding = 3) readonly buffer Lines { float line_rate[]; };
-uniform int factor;
-// Segments of a patch edge of refinement level k on a line of `r` segments at level 0: a power
-// of two, so that an edge at level k is exactly twice the two edges at level k + 1 beside it.
-float rate(float r, float k) {
-  float m = round(log2(max(r, 1.0)));
-  return clamp(exp2(m - k), 1.0, 32.0);
-}
-void main() {
-  c_pos[gl_InvocationID] = v_pos[gl_InvocationID];
-  c_patch[gl_InvocationID] = v_patch[gl_InvocationID];
-  if (gl_InvocationID == 0) {
-    uint p = v_patch[0];
-    Info I = info[p];
-    float k = float(I.bits & 0xFFu);
-    uint transition = (I.bits >> 12) & 0xFu;
-    float e[4];
-    for (int j = 0; j < 4; ++j) {
-      bool split = ((transition >> uint(j)) & 1u) != 0u;
-      // An edge bordering finer patches takes the sum of their two rates.
-      float f = factor > 0 ? float(factor) : rate(line_rate[I.keys[j]], split ? k + 1.0 : k);
-      e[j] = split ? 2.0 * f : f;
-    }
-    // Patch edge j: 0 is v = 0, 1 is u = 1, 2 is v = 1, 3 is u = 0; GL's outer levels run
-    // u = 0, v = 0, u = 1, v = 1.
-    gl_TessLevelOuter[0] = e[3];
-    gl_TessLevelOuter[1] = e[0];
-    gl_TessLevelOuter[2] = e[1];
-    gl_TessLevelOuter[3] = e[2];
-    gl_TessLevelInner[0] = max(e[0], e[2]);
-    gl_TessLevelInner[1] = max(e[1], e[3]);
-  }
-}
-)";
-
-constexpr const char* kEvalCommon = R"(
-layout(quads, equal_spacing, ccw) in;
-in vec3 c_pos[];
-flat in uint c_patch[];
-uniform mat4 view_proj;
-out vec3 t_pos;
-out vec3 t_nrm;
-out vec2 t_uv;
-flat out uint t_patch;
-void emit_point(vec3 p, vec3 pu, vec3 pv) {
-  vec3 n = cross(pu, pv);
-  if (dot(n, n) < 1e-30) n = cross(c_pos[CVS - 1] - c_pos[0], c_pos[CVS / 2] - c_pos[CVS / 4]);
-  t_pos = p;
-  t_nrm = n;
-  t_uv = gl_TessCoord.xy;
-  t_patch = c_patch[0];
-  gl_Position = view_proj * vec4(p, 1.0);
-}
-)";
-
-// The same bases as limn's CPU evaluator (src/subdiv/patch_eval.cpp).
-constexpr const char* kEvalRegular = R"(
-void bspline(float t, out vec4 w, out vec4 d) {
-  float s = 1.0 - t, t2 = t * t, t3 = t2 * t;
-  w = vec4(s * s * s, 3.0 * t3 - 6.0 * t2 + 4.0, -3.0 * t3 + 3.0 * t2 + 3.0 * t + 1.0, t3) / 6.0;
-  d = vec4(-0.5 * s * s, 1.5 * t2 - 2.0 * t, -1.5 * t2 + t + 0.5, 0.5 * t2);
-}
-// An extrapolated end point (2 next - next but one) folded into the other weights.
-vec4 fold(vec4 w, bool lo, bool hi) {
-  if (lo) { w.y += 2.0 * w.x; w.z -= w.x; w.x = 0.0; }
-  if (hi) { w.z += 2.0 * w.w; w.y -= w.w; w.w = 0.0; }
-  return w;
-}
-// The limit basis of a cubic curve whose point 1 is a semi-sharp vertex of sharpness s.
-void crease_basis(float t, float s, out vec4 w, out vec4 d) {
-  mat4 A = mat4(1.0);  // rows: the current segment's points over the original four
-  float scale = 1.0;
-  for (int guard = 0; guard < 16 && s > 0.0; ++guard) {
-    float a = min(s, 1.0);
-    vec4 v1 = vec4((1.0 - a) / 8.0, a + (1.0 - a) * 0.75, (1.0 - a) / 8.0, 0.0);
-    vec4 e01 = vec4(0.5, 0.5, 0.0, 0.0), e12 = vec4(0.0, 0.5, 0.5, 0.0);
-    vec4 e23 = vec4(0.0, 0.0, 0.5, 0.5), v2 = vec4(0.0, 0.125, 0.75, 0.125);
-    mat4 M;  // GLSL matrices are column-major: build with rows transposed
-    if (t < 0.5) {
-      M = transpose(mat4(e01, v1, e12, v2));
-      t *= 2.0; scale *= 2.0; s -= 1.0;
-    } else {
-      M = transpose(mat4(v1, e12, v2, e23));
-      t = 2.0 * t - 1.0; scale *= 2.0; s = 0.0;
-    }
-    A = M * A;
-  }
-  vec4 b, db;
-  bspline(t, b, db);
-  w = b * A;            // w_j = sum_i b_i A[i][j]
-  d = (db * A) * scale;
-}
-void main() {
-  float s = gl_TessCoord.x, t = gl_TessCoord.y;
-  Info I = info[c_patch[0]];
-  uint boundary = (I.bits >> 8) & 0xFu;
-  vec4 wu, du, wv, dv;
-  bspline(s, wu, du);
-  bspline(t, wv, dv);
-  wu = fold(wu, (boundary & 8u) != 0u, (boundary & 2u) != 0u);
-  du = fold(du, (boundary & 8u) != 0u, (boundary & 2u) != 0u);
-  wv = fold(wv, (boundary & 1u) != 0u, (boundary & 4u) != 0u);
-  dv = fold(dv, (boundary & 1u) != 0u, (boundary & 4u) != 0u);
-  if (((I.bits >> 16) & 3u) == 2u) {  // single crease along edge ce, at the basis' t = 0
-    uint ce = (I.bits >> 18) & 3u;
-    float x = ce == 0u ? t : ce == 2u ? 1.0 - t : ce == 3u ? s : 1.0 - s;
-    vec4 cw, cd;
-    crease_basis(x, I.sharpness, cw, cd);
-    if (ce == 1u || ce == 2u) { cw = cw.wzyx; cd = -cd.wzyx; }
-    if (ce == 0u || ce == 2u) { wv = cw; dv = cd; } else { wu = cw; du = cd; }
-  }
-  vec3 p = vec3(0.0), pu = vec3(0.0), pv = vec3(0.0);
-  for (int y = 0; y < 4; ++y) {
-    vec3 rp = vec3(0.0), ru = vec3(0.0);
-    for (int x = 0; x < 4; ++x) {
-      vec3 c = c_pos[4 * y + x];
-      rp += wu[x] * c;
-      ru += du[x] * c;
-    }
-    p += wv[y] * rp;
-    pu += wv[y] * ru;
-    pv += dv[y] * rp;
-  }
-  emit_point(p, pu, pv);
-}
-)";
-
-constexpr const char* kEvalGregory = R"(
-void bezier(float t, out vec4 w, out vec4 d) {
-  float s = 1.0 - t;
-  w = vec4(s * s * s, 3.0 * t * s * s, 3.0 * t * t * s, t * t * t);
-  d = vec4(-3.0 * s * s, 3.0 * s * s - 6.0 * t * s, 6.0 * t * s - 3.0 * t * t, 3.0 * t * t);
-}
-const ivec3 kSlot[12] = ivec3[12](ivec3(0, 0, 0), ivec3(1, 0, 1), ivec3(2, 0, 7), ivec3(3, 0, 5),
-                                   ivec3(0, 1, 2), ivec3(3, 1, 6), ivec3(0, 2, 16), ivec3(3, 2, 12),
-                                   ivec3(0, 3, 15), ivec3(1, 3, 17), ivec3(2, 3, 11),
-                                   ivec3(3, 3, 10));
-void main() {
-  float s = gl_TessCoord.x, t = gl_TessCoord.y;
-  vec4 wu, du, wv, dv;
-  bezier(s, wu, du);
-  bezier(t, wv, dv);
-  vec3 p = vec3(0.0), pu = vec3(0.0), pv = vec3(0.0);
-  for (int i = 0; i < 12; ++i) {
-    ivec3 b = kSlot[i];
-    vec3 c = c_pos[b.z];
-    p += wu[b.x] * wv[b.y] * c;
-    pu += du[b.x] * wv[b.y] * c;
-    pv += wu[b.x] * dv[b.y] * c;
-  }
-  // Interior point of corner i: (a Fp + (D - a) Fm) / D with a and D linear in (s, t).
-  float a[4] = float[4](s, t, 1.0 - s, 1.0 - t);
-  vec2 ad[4] = vec2[4](vec2(1, 0), vec2(0, 1), vec2(-1, 0), vec2(0, -1));
-  float D[4] = float[4](s + t, t + 1.0 - s, 2.0 - s - t, 1.0 - t + s);
-  vec2 Dd[4] = vec2[4](vec2(1, 1), vec2(-1, 1), vec2(-1, -1), vec2(1, -1));
-  ivec3 slot[4] = ivec3[4](ivec3(1, 1, 3), ivec3(2, 1, 8), ivec3(2, 2, 13), ivec3(1, 2, 18));
-  for (int i = 0; i < 4; ++i) {
-    float g = 0.5;
-    vec2 gd = vec2(0.0);
-    if (D[i] > 0.0) {
-      g = a[i] / D[i];
-      gd = (ad[i] * D[i] - a[i] * Dd[i]) / (D[i] * D[i]);
-    }
-    ivec3 b = slot[i];
-    float w = wu[b.x] * wv[b.y], w_u = du[b.x] * wv[b.y], w_v = wu[b.x] * dv[b.y];
-    vec3 fp = c_pos[b.z], fm = c_pos[b.z + 1];
-    vec3 f = g * fp + (1.0 - g) * fm, fdiff = fp - fm;
-    p += w * f;
-    pu += w_u * f + w * gd.x * fdiff;
-    pv += w_v * f + w * gd.y * fdiff;
-  }
-  emit_point(p, pu, pv);
-}
-)";
-
-constexpr const char* kFragment = R"(
-in vec3 t_pos;
-in vec3 t_nrm;
-in vec2 t_uv;
-flat in uint t_patch;
-uniform vec3 eye;
-uniform vec3 base;
-uniform vec3 ramp[17];
-out vec4 frag;
-// Options are compiled in, not uniforms: llvmpipe runs both sides of a branch on a uniform.
-#ifdef OUTLINE
-const bool outline = true;
-#else
-const bool outline = false;
-#endif
-#ifdef DEPTH_COLORS
-const bool depth_colors = true;
-#else
-const bool depth_colors = false;
-#endif
-void main() {
-  vec3 c = base;
-  if (depth_colors) c = ramp[min(info[t_patch].bits & 0xFFu, 16u)];
-  c = oct_paint(c, t_pos, t_nrm);
-  float edge = 1e9;
-  if (outline) {
-    vec2 d = min(t_uv, 1.0 - t_uv) / max(fwidth(t_uv), vec2(1e-9));
-    edge = min(d.x, d.y);
-  }
-  frag = vec4(shade(c, t_pos, t_nrm, eye, edge, outline), 1.0);
-}
-)";
 
 std::string with_header(int cvs, const char* a, const char* b = "", const char* c = "",
                         const char* d = "") {
@@ -493,9 +257,9 @@ const std::array<gl::Program, 2>& PatchDrawer::Impl::programs_for(const DrawOpti
   if (p[0].get()) return p;
   const std::string defines = fmt::format("{}{}", o.outline ? "#define OUTLINE\n" : "",
                                           o.depth_colors ? "#define DEPTH_COLORS\n" : "");
-  const std::string fs = with_header(16, defines.c_str(), kInfo, gl::kShadeGlsl,
-                                     o.texture ? gl::kOctreeGlsl : gl::kNoOctreeGlsl) +
-                         kFragment;
+  const std::string fs = with_header(16, defines.c_str(), shaders::patch_info, shaders::shade,
+                                     o.texture ? shaders::octree : shaders::no_octree) +
+                         shaders::patch_frag;
   p[0] = gl::program("regular patches", {{GL_VERTEX_SHADER, vs16},
                                          {GL_TESS_CONTROL_SHADER, tc16},
                                          {GL_TESS_EVALUATION_SHADER, te16},
@@ -513,10 +277,11 @@ PatchDrawer::PatchDrawer(const Mesh& cage, const PatchTable& table, std::span<co
   m.cage = &cage;
   m.topo = build_topology(cage);
   upload_patches(table);
-  m.vs16 = with_header(16, kVertex), m.vs20 = with_header(20, kVertex);
-  m.tc16 = with_header(16, kInfo, kControl), m.tc20 = with_header(20, kInfo, kControl);
-  m.te16 = with_header(16, kInfo, kEvalCommon, kEvalRegular);
-  m.te20 = with_header(20, kInfo, kEvalCommon, kEvalGregory);
+  m.vs16 = with_header(16, shaders::patch_vert), m.vs20 = with_header(20, shaders::patch_vert);
+  m.tc16 = with_header(16, shaders::patch_info, shaders::patch_tesc),
+  m.tc20 = with_header(20, shaders::patch_info, shaders::patch_tesc);
+  m.te16 = with_header(16, shaders::patch_info, shaders::patch_eval, shaders::patch_regular_tese);
+  m.te20 = with_header(20, shaders::patch_info, shaders::patch_eval, shaders::patch_gregory_tese);
   m.programs_for(DrawOptions{});  // the default programs, so that shader errors show here
   // The tessellation stages alone, their position, (s, t) and patch captured by transform
   // feedback (interleaved: 3 + 2 floats, then the patch as a float-bit uint).

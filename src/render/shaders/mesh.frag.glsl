@@ -1,0 +1,21 @@
+// mesh.frag: MeshDrawer's fragment shader (after shade.glsl and octree.glsl)
+in vec3 t_pos;
+in vec3 t_nrm;
+in vec3 t_col;
+in vec3 t_bary;
+uniform vec3 eye;
+out vec4 frag;
+// Compiled in, not a uniform: llvmpipe runs both sides of a branch on a uniform.
+#ifdef OUTLINE
+const bool outline = true;
+#else
+const bool outline = false;
+#endif
+void main() {
+  float edge = 1e9;
+  if (outline) {
+    vec3 d = t_bary / max(fwidth(t_bary), vec3(1e-9));
+    edge = min(d.x, min(d.y, d.z));
+  }
+  frag = vec4(shade(oct_paint(t_col, t_pos, t_nrm), t_pos, t_nrm, eye, edge, outline), 1.0);
+}

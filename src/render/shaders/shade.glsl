@@ -1,0 +1,13 @@
+// shade: the shading shared by the patch and mesh programs: two-sided Blinn-Phong under a head
+// light, with an optional outline where `edge` (0 on an edge, growing inwards) is small.
+vec3 shade(vec3 base, vec3 pos, vec3 nrm, vec3 eye, float edge, bool outline) {
+  vec3 v = normalize(eye - pos);
+  vec3 n = normalize(nrm);
+  if (dot(n, v) < 0.0) n = -n;  // two-sided: open surfaces and inverted cages look right
+  float diff = max(dot(n, v), 0.0);
+  vec3 h = normalize(v + vec3(0.3, 0.5, 0.0));
+  float spec = pow(max(dot(n, h), 0.0), 40.0);
+  vec3 c = base * (0.18 + 0.82 * diff) + vec3(0.18 * spec);
+  if (outline) c = mix(vec3(0.06), c, smoothstep(0.6, 1.6, edge));
+  return c;
+}
