@@ -15,7 +15,7 @@
 #include <cstring>
 #include <filesystem>
 
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 #include "limn/subdiv/depth.hpp"
 #include "limn/subdiv/patches.hpp"
 #include "screen_error.hpp"

@@ -11,7 +11,7 @@
 #include <filesystem>
 #include <map>
 
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 #include "limn/mesh/shapes.hpp"
 #include "limn/mesh/topology.hpp"
 

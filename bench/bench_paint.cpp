@@ -58,12 +58,12 @@
 #include <openvdb/openvdb.h>
 #pragma GCC diagnostic pop
 
-#include "geometry.hpp"
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 #include "limn/paint/brush.hpp"
 #include "limn/paint/lookup.hpp"
 #include "limn/paint/surface.hpp"
 #include "limn/paint/texture.hpp"
+#include "paint/geometry.hpp"
 #include "paint_scene.hpp"
 
 namespace fs = std::filesystem;
@@ -615,9 +615,9 @@ int main(int argc, char** argv) {
         std::vector<std::vector<float>> paths;
         for (const Sample& x : at) {
           paint_detail::V3 p = paint_detail::v3(x.p), n = paint_detail::v3(x.n);
-          paint_detail::V3 d = paint_detail::cross(
+          paint_detail::V3 d = cross(
               n, std::fabs(n.x) < 0.9f ? paint_detail::V3{1, 0, 0} : paint_detail::V3{0, 1, 0});
-          d = (1 / paint_detail::length(d)) * d;
+          d = (1 / length(d)) * d;
           std::vector<float> xyz = {p.x, p.y, p.z};
           const float step = b.spacing * b.radius / 8;
           for (int i = 0; i < 96; ++i) {
@@ -628,8 +628,8 @@ int main(int argc, char** argv) {
             const paint_detail::V3 np = paint_detail::v3(hit.p);
             n = paint_detail::v3(hit.n);
             d = np - p;
-            d = d - paint_detail::dot(d, n) * n;
-            const float l = paint_detail::length(d);
+            d = d - dot(d, n) * n;
+            const float l = length(d);
             if (!(l > 0)) break;
             d = (1 / l) * d, p = np;
             xyz.insert(xyz.end(), {p.x, p.y, p.z});

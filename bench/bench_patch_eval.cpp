@@ -49,7 +49,7 @@
 
 #include "osd_bench.hpp"
 
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 #include "limn/mesh/shapes.hpp"
 #include "limn/subdiv/patches.hpp"
 

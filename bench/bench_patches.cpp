@@ -47,7 +47,7 @@
 
 #include "osd_bench.hpp"
 
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 #include "limn/subdiv/patches.hpp"
 
 using namespace OpenSubdiv;

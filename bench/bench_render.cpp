@@ -36,7 +36,7 @@
 #include <string>
 #include <vector>
 
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 #include "limn/mesh/shapes.hpp"
 #include "limn/render/draw.hpp"
 #include "limn/render/gl_context.hpp"

@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "cgal_vsa.hpp"
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 #include "limn/simplify/vsa.hpp"
 
 namespace fs = std::filesystem;

@@ -24,7 +24,7 @@
 #include <opensubdiv/osd/cpuEvaluator.h>
 #pragma GCC diagnostic pop
 
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 #include "limn/mesh/shapes.hpp"
 #include "limn/subdiv/refine.hpp"
 

@@ -25,7 +25,7 @@
 #include <string>
 #include <vector>
 
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 #include "limn/paint/brush.hpp"
 #include "limn/paint/lookup.hpp"
 #include "limn/paint/surface.hpp"

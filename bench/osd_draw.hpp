@@ -26,8 +26,8 @@
 #include <string>
 #include <vector>
 
-#include "gl_util.hpp"  // src/render: view and projection of a limn Camera, gl::check
 #include "osd_bench.hpp"
+#include "render/gl_util.hpp"  // view and projection of a limn Camera, gl::check
 
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wshadow"

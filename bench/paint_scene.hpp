@@ -6,10 +6,10 @@
 #include <random>
 #include <vector>
 
-#include "geometry.hpp"
 #include "limn/paint/brush.hpp"
 #include "limn/paint/surface.hpp"
 #include "limn/paint/texture.hpp"
+#include "paint/geometry.hpp"
 
 namespace limn::bench {
 
@@ -25,7 +25,7 @@ inline std::vector<Sample> surface_points(const PaintSurface& s, size_t count, u
     const paint_detail::V3 a = paint_detail::v3(s.corner(t, 0)),
                            b = paint_detail::v3(s.corner(t, 1)),
                            c = paint_detail::v3(s.corner(t, 2));
-    total += 0.5 * double(paint_detail::length(paint_detail::cross(b - a, c - a)));
+    total += 0.5 * double(length(cross(b - a, c - a)));
     cdf.push_back(total);
   }
   std::mt19937_64 rng(seed);

@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <string_view>
 
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string_view in(reinterpret_cast<const char*>(data), size);

@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <string_view>
 
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 
 namespace {
 

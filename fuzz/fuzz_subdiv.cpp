@@ -9,7 +9,7 @@
 #include <string_view>
 #include <vector>
 
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 #include "limn/subdiv/patches.hpp"
 #include "limn/subdiv/refine.hpp"
 #include "limn/subdiv/tessellate.hpp"

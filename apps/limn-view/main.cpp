@@ -6,7 +6,7 @@
 #include <string>
 
 #include "../common/image_size.hpp"
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 #include "limn/mesh/shapes.hpp"
 #include "limn/version.hpp"
 #include "scene.hpp"

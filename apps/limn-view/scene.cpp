@@ -7,7 +7,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 #include "limn/paint/file.hpp"
 #include "limn/paint/surface.hpp"
 #include "limn/subdiv/refine.hpp"

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 
 namespace limn::view {
 

@@ -8,22 +8,14 @@
 
 #include <algorithm>
 
+#include "core/parallel.hpp"
 #include "limn/mesh/topology.hpp"
 
 namespace limn {
 
 namespace {
 
-template <class F>
-void parallel_range(size_t n, F&& body) {
-  constexpr size_t kGrain = 1 << 14;  // below this, threading costs more than it saves
-  if (n < 2 * kGrain) {
-    body(size_t(0), n);
-    return;
-  }
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kGrain),
-                    [&](const tbb::blocked_range<size_t>& r) { body(r.begin(), r.end()); });
-}
+constexpr size_t kGrain = 1 << 14;  // below this, threading costs more than it saves
 
 }  // namespace
 
@@ -39,7 +31,7 @@ Topology build_topology(size_t nv, std::span<const uint32_t> face_offsets,
   t.corner_face.resize(nc);
   t.corner_next.resize(nc);
   t.corner_prev.resize(nc);
-  parallel_range(nf, [&](size_t b, size_t e) {
+  parallel_range(nf, kGrain, [&](size_t b, size_t e) {
     for (size_t f = b; f < e; ++f) {
       const uint32_t o = face_offsets[f], n = face_offsets[f + 1] - o;
       for (uint32_t i = 0; i < n; ++i) {
@@ -75,7 +67,7 @@ Topology build_topology(size_t nv, std::span<const uint32_t> face_offsets,
   const uint32_t* vo = t.vertex_offsets.data();
   const uint32_t* vc = t.vertex_corners.data();
   const uint32_t* to = star_to.data();
-  parallel_range(nc, [&](size_t b, size_t e) {
+  parallel_range(nc, kGrain, [&](size_t b, size_t e) {
     for (size_t c = b; c < e; ++c) {
       const uint32_t a = fv[c], bb = fv[next[c]];
       uint32_t own = static_cast<uint32_t>(c), n = 0, other = kNone;
@@ -108,7 +100,7 @@ Topology build_topology(size_t nv, std::span<const uint32_t> face_offsets,
     if (owner[c] == c) t.corner_edge[c] = ne++;
   t.edge_vertices.resize(2 * size_t(ne));
   t.edge_faces.resize(ne);
-  parallel_range(nc, [&](size_t b, size_t e) {
+  parallel_range(nc, kGrain, [&](size_t b, size_t e) {
     for (size_t c = b; c < e; ++c) {
       if (owner[c] != c) continue;
       const uint32_t id = t.corner_edge[c], a = fv[c], bb = fv[next[c]];
@@ -118,7 +110,7 @@ Topology build_topology(size_t nv, std::span<const uint32_t> face_offsets,
     }
   });
   // Owners precede the corners they own, so one ordered pass would do; parallel needs two.
-  parallel_range(nc, [&](size_t b, size_t e) {
+  parallel_range(nc, kGrain, [&](size_t b, size_t e) {
     for (size_t c = b; c < e; ++c)
       if (owner[c] != c) t.corner_edge[c] = t.corner_edge[owner[c]];
   });

@@ -11,6 +11,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "core/timer.hpp"
 #include "limn/paint/lookup.hpp"
 #include "refine.hpp"
 
@@ -553,8 +554,7 @@ StrokeStats StrokePainter::end() {
   s.bricks_created = st_->refiner.stats.bricks_created;
   s.nodes_created = st_->refiner.stats.generals_created + st_->refiner.stats.bricks_created;
   s.tasks = st_->refiner.stats.tasks, s.tasks_threaded = st_->refiner.stats.tasks_threaded;
-  s.ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - st_->t0).count();
+  s.ms = ms_since(st_->t0);
   delete st_;
   st_ = nullptr;
   if (history_) history_->end(t_);

@@ -6,33 +6,14 @@
 #include <cmath>
 #include <cstdint>
 
+#include "core/vec3.hpp"
 #include "limn/mesh/morton.hpp"
 
 namespace limn::paint_detail {
 
-struct V3 {
-  float x = 0, y = 0, z = 0;
-};
+using V3 = Vec3f;
 inline V3 v3(const float* p) {
-  return {p[0], p[1], p[2]};
-}
-inline V3 operator-(V3 a, V3 b) {
-  return {a.x - b.x, a.y - b.y, a.z - b.z};
-}
-inline V3 operator+(V3 a, V3 b) {
-  return {a.x + b.x, a.y + b.y, a.z + b.z};
-}
-inline V3 operator*(float s, V3 a) {
-  return {s * a.x, s * a.y, s * a.z};
-}
-inline float dot(V3 a, V3 b) {
-  return a.x * b.x + a.y * b.y + a.z * b.z;
-}
-inline V3 cross(V3 a, V3 b) {
-  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-inline float length(V3 a) {
-  return std::sqrt(dot(a, a));
+  return load3<float>(p);
 }
 
 // Separating-axis test of a triangle against an axis-aligned box given by its centre and half

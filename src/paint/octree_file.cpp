@@ -4,7 +4,7 @@
 #include <cstring>
 #include <string>
 
-#include "limn/mesh/io.hpp"
+#include "limn/mesh/file.hpp"
 #include "limn/paint/file.hpp"
 #include "octree_blocks.hpp"
 

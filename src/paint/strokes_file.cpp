@@ -5,7 +5,7 @@
 #include <set>
 #include <string>
 
-#include "limn/mesh/io.hpp"
+#include "limn/mesh/file.hpp"
 #include "limn/paint/strokes.hpp"
 
 namespace limn {

@@ -9,7 +9,7 @@
 #include <string>
 
 #include "gl_util.hpp"
-#include "limn/mesh/io.hpp"
+#include "limn/mesh/file.hpp"
 
 namespace limn {
 

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <vector>
 
+#include "core/timer.hpp"
 #include "gl_util.hpp"
 #include "limn/render/draw.hpp"
 #include "shaders.hpp"
@@ -187,8 +188,7 @@ DrawStats MeshDrawer::draw(const Camera& camera, const DrawOptions& o) {
   st.patches = m.faces;
   st.triangles = prims;
   st.gpu_ms = double(ns) * 1e-6;
-  st.cpu_ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  st.cpu_ms = ms_since(t0);
   return st;
 }
 

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "core/timer.hpp"
 #include "draw_ranges.hpp"
 #include "gl_util.hpp"
 #include "limn/mesh/morton.hpp"
@@ -429,8 +430,7 @@ DrawStats PatchDrawer::draw(const Camera& camera, const DrawOptions& o) {
   gl::check("PatchDrawer::draw");
   st.gpu_ms = double(ns) * 1e-6;
   st.triangles = prims;
-  st.cpu_ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  st.cpu_ms = ms_since(t0);
   return st;
 }
 

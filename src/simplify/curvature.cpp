@@ -4,27 +4,9 @@
 #include <cmath>
 #include <numbers>
 
+#include "core/vec3.hpp"
+
 namespace limn {
-
-namespace {
-
-struct V3 {
-  double x, y, z;
-};
-V3 sub(V3 a, V3 b) {
-  return {a.x - b.x, a.y - b.y, a.z - b.z};
-}
-double dot(V3 a, V3 b) {
-  return a.x * b.x + a.y * b.y + a.z * b.z;
-}
-V3 cross(V3 a, V3 b) {
-  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-double len(V3 a) {
-  return std::sqrt(dot(a, a));
-}
-
-}  // namespace
 
 std::vector<double> gaussian_curvature(const VsaSurface& s) {
   const Mesh& m = *s.mesh;
@@ -32,20 +14,20 @@ std::vector<double> gaussian_curvature(const VsaSurface& s) {
   std::vector<double> angle(nv, 0.0), area(nv, 0.0);
   auto pos = [&](uint32_t v) {
     const float* p = &m.positions[3 * size_t(v)];
-    return V3{p[0], p[1], p[2]};
+    return Vec3d{p[0], p[1], p[2]};
   };
   for (size_t f = 0; f < m.face_count(); ++f) {
     const auto fv = m.face(f);
     for (size_t i = 1; i + 1 < fv.size(); ++i) {
       const uint32_t id[3] = {fv[0], fv[i], fv[i + 1]};
-      const V3 p[3] = {pos(id[0]), pos(id[1]), pos(id[2])};
-      const double a2 = len(cross(sub(p[1], p[0]), sub(p[2], p[0])));  // twice the area
+      const Vec3d p[3] = {pos(id[0]), pos(id[1]), pos(id[2])};
+      const double a2 = length(cross(p[1] - p[0], p[2] - p[0]));  // twice the area
       // Zero-area triangles have no meaningful angles (they would read 0, 0 and pi).
       if (!(a2 > 0)) continue;
       double ang[3], cot[3];
       for (int k = 0; k < 3; ++k) {
-        const V3 u = sub(p[(k + 1) % 3], p[k]), w = sub(p[(k + 2) % 3], p[k]);
-        ang[k] = std::atan2(len(cross(u, w)), dot(u, w));
+        const Vec3d u = p[(k + 1) % 3] - p[k], w = p[(k + 2) % 3] - p[k];
+        ang[k] = std::atan2(length(cross(u, w)), dot(u, w));
         cot[k] = dot(u, w) / a2;  // |u x w| is twice the area for every corner
       }
       const bool obtuse = ang[0] > std::numbers::pi / 2 || ang[1] > std::numbers::pi / 2 ||
@@ -55,7 +37,7 @@ std::vector<double> gaussian_curvature(const VsaSurface& s) {
         double a;
         if (!obtuse) {
           // Voronoi region: the two edges at this corner, each weighted by the opposite cot.
-          const V3 e1 = sub(p[(k + 1) % 3], p[k]), e2 = sub(p[(k + 2) % 3], p[k]);
+          const Vec3d e1 = p[(k + 1) % 3] - p[k], e2 = p[(k + 2) % 3] - p[k];
           a = (dot(e1, e1) * cot[(k + 2) % 3] + dot(e2, e2) * cot[(k + 1) % 3]) / 8.0;
         } else {
           a = ang[k] > std::numbers::pi / 2 ? a2 / 4.0 : a2 / 8.0;

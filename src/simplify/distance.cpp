@@ -12,25 +12,13 @@
 #include <stdexcept>
 #include <vector>
 
+#include "core/vec3.hpp"
+
 namespace limn {
 
 namespace {
 
-struct P3 {
-  double x, y, z;
-};
-P3 operator-(P3 a, P3 b) {
-  return {a.x - b.x, a.y - b.y, a.z - b.z};
-}
-P3 operator+(P3 a, P3 b) {
-  return {a.x + b.x, a.y + b.y, a.z + b.z};
-}
-P3 operator*(double s, P3 a) {
-  return {s * a.x, s * a.y, s * a.z};
-}
-double dot(P3 a, P3 b) {
-  return a.x * b.x + a.y * b.y + a.z * b.z;
-}
+using P3 = Vec3d;
 
 // Closest point on triangle abc to p, by the Voronoi regions of its vertices, edges and face
 // (Ericson, Real-Time Collision Detection, sec. 5.1.5).
@@ -178,7 +166,7 @@ SurfaceDistance surface_distance(const Mesh& simplified, const Mesh& reference, 
     for (size_t i = 1; i + 1 < v.size(); ++i) {
       const P3 a = P(v[0]), b = P(v[i]), c = P(v[i + 1]);
       const P3 u = b - a, w = c - a;
-      const P3 x{u.y * w.z - u.z * w.y, u.z * w.x - u.x * w.z, u.x * w.y - u.y * w.x};
+      const P3 x = cross(u, w);
       total += 0.5 * std::sqrt(dot(x, x));
       tris.insert(tris.end(), {v[0], v[i], v[i + 1]});
       cum.push_back(total);

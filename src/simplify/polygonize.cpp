@@ -12,6 +12,7 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "core/vec3.hpp"
 #include "limn/simplify/cluster_edit.hpp"
 #include "limn/simplify/triangulate.hpp"
 
@@ -19,28 +20,12 @@ namespace limn {
 
 namespace {
 
-struct V3 {
-  double x, y, z;
-};
-V3 sub(V3 a, V3 b) {
-  return {a.x - b.x, a.y - b.y, a.z - b.z};
-}
-double dot(V3 a, V3 b) {
-  return a.x * b.x + a.y * b.y + a.z * b.z;
-}
-V3 cross(V3 a, V3 b) {
-  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-double norm(V3 a) {
-  return std::sqrt(dot(a, a));
-}
-
-double point_segment(V3 p, V3 a, V3 b) {
-  const V3 ab = sub(b, a), ap = sub(p, a);
+double point_segment(Vec3d p, Vec3d a, Vec3d b) {
+  const Vec3d ab = b - a, ap = p - a;
   const double l2 = dot(ab, ab);
-  if (!(l2 > 0)) return norm(ap);
+  if (!(l2 > 0)) return length(ap);
   const double t = std::clamp(dot(ap, ab) / l2, 0.0, 1.0);
-  return norm(sub(ap, {ab.x * t, ab.y * t, ab.z * t}));
+  return length(ap - t * ab);
 }
 
 inline uint64_t pair_key(uint32_t a, uint32_t b) {
@@ -85,7 +70,7 @@ class Mesher {
   }
 
  private:
-  V3 pos(uint32_t v) const {
+  Vec3d pos(uint32_t v) const {
     const float* q = &m_.positions[3 * size_t(v)];
     return {q[0], q[1], q[2]};
   }
@@ -193,7 +178,7 @@ class Mesher {
   // ij (from point i when both ends coincide). Returns its position.
   uint32_t split_at_farthest(uint32_t id, uint32_t i, uint32_t j) {
     const uint32_t* v = &chain_verts_[chain_offsets_[id]];
-    const V3 a = pos(v[i]), b = pos(v[j]);
+    const Vec3d a = pos(v[i]), b = pos(v[j]);
     double best = -1;
     uint32_t k = i + 1;
     for (uint32_t q = i + 1; q < j; ++q) {
@@ -225,8 +210,8 @@ class Mesher {
       const auto [i, j] = stack.back();
       stack.pop_back();
       if (j - i < 2) continue;
-      const V3 a = pos(v[i]), b = pos(v[j]);
-      const double len = norm(sub(b, a));
+      const Vec3d a = pos(v[i]), b = pos(v[j]);
+      const double len = length(b - a);
       double best = -1;
       uint32_t k = i + 1;
       for (uint32_t q = i + 1; q < j; ++q) {
@@ -282,13 +267,13 @@ class Mesher {
   }
 
   double polygon_area(const std::vector<uint32_t>& q) const {
-    V3 n{0, 0, 0};
-    const V3 o = pos(q[0]);
+    Vec3d n{0, 0, 0};
+    const Vec3d o = pos(q[0]);
     for (size_t i = 1; i + 1 < q.size(); ++i) {
-      const V3 c = cross(sub(pos(q[i]), o), sub(pos(q[i + 1]), o));
+      const Vec3d c = cross(pos(q[i]) - o, pos(q[i + 1]) - o);
       n = {n.x + c.x, n.y + c.y, n.z + c.z};
     }
-    return 0.5 * norm(n);
+    return 0.5 * length(n);
   }
 
   // Cuts hole loop H out of one of `pieces` (simple polygons of the same cluster) with two
@@ -305,7 +290,7 @@ class Mesher {
         for (size_t b = 0; b < H.size(); ++b) {
           const bool shared = P[a] == H[b];
           if (!shared && used_edges_.count(pair_key(P[a], H[b]))) continue;
-          const double d = shared ? -1.0 : norm(sub(pos(P[a]), pos(H[b])));
+          const double d = shared ? -1.0 : length(pos(P[a]) - pos(H[b]));
           if (d < best) best = d, bp = pi, o1 = a, h1 = b;
         }
     }
@@ -326,7 +311,7 @@ class Mesher {
           if (!shared && (used_edges_.count(pair_key(P[a], H[b])) ||
                           pair_key(P[a], H[b]) == pair_key(P[o1], H[h1])))
             continue;
-          const double d = shared ? -1.0 : norm(sub(pos(P[a]), pos(H[b])));
+          const double d = shared ? -1.0 : length(pos(P[a]) - pos(H[b]));
           if (d < bd) bd = d, o2 = a, h2 = b;
         }
       }
@@ -365,7 +350,7 @@ class Mesher {
     const uint32_t n = static_cast<uint32_t>(q.size());
     double pn[3];
     p_.proxy_normal(k, pn);
-    const V3 proxy{pn[0], pn[1], pn[2]};
+    const Vec3d proxy{pn[0], pn[1], pn[2]};
     auto ok = [&](uint32_t i, uint32_t j) {
       return q[i] != q[j] && !used_edges_.count(pair_key(q[i], q[j]));
     };
@@ -373,8 +358,8 @@ class Mesher {
       const uint32_t a = q[i], b = q[j], c = q[l];
       constexpr double inf = std::numeric_limits<double>::infinity();
       if (a == b || b == c || a == c) return inf;
-      const V3 x = cross(sub(pos(b), pos(a)), sub(pos(c), pos(a)));
-      const double area = 0.5 * norm(x);
+      const Vec3d x = cross(pos(b) - pos(a), pos(c) - pos(a));
+      const double area = 0.5 * length(x);
       if (!(area > eps_area_)) return inf;
       // Triangles facing against the cluster's proxy would fold the surface.
       return dot(x, proxy) < 0 ? 11 * area : area;
@@ -419,7 +404,7 @@ class Mesher {
         const uint32_t g = s_.across(c);
         if (g != kNone && p_.label[g] == k && in_faces.insert(g).second) faces.push_back(g);
       }
-    V3 centre{0, 0, 0};
+    Vec3d centre{0, 0, 0};
     for (uint32_t v : q) centre = {centre.x + pos(v).x, centre.y + pos(v).y, centre.z + pos(v).z};
     centre = {centre.x / double(q.size()), centre.y / double(q.size()),
               centre.z / double(q.size())};
@@ -428,14 +413,14 @@ class Mesher {
     for (uint32_t f : faces)
       for (uint32_t v : m_.face(f))
         if (deg_[v] == 0 && !keep_[v] && seen.insert(v).second)
-          candidates.push_back({norm(sub(pos(v), centre)), v});
+          candidates.push_back({length(pos(v) - centre), v});
     std::sort(candidates.begin(), candidates.end());
     for (size_t c = 0; c < std::min<size_t>(candidates.size(), 16); ++c) {
       const uint32_t P = candidates[c].second;
       bool good = true;
       for (size_t i = 0; i < q.size() && good; ++i) {
         const uint32_t a = q[i], b = q[(i + 1) % q.size()];
-        const double area = 0.5 * norm(cross(sub(pos(a), pos(P)), sub(pos(b), pos(P))));
+        const double area = 0.5 * length(cross(pos(a) - pos(P), pos(b) - pos(P)));
         good = area > eps_area_;
       }
       if (!good) continue;

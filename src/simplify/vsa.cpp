@@ -5,15 +5,11 @@
 #include <chrono>
 #include <utility>
 
+#include "core/timer.hpp"
+
 namespace limn {
 
 namespace {
-
-double now_ms() {
-  return std::chrono::duration<double, std::milli>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
 
 void add(GreedyStats& a, const GreedyStats& b) {
   if (a.moves == 0 && a.evaluations == 0) a.energy_before = b.energy_before;
@@ -27,14 +23,14 @@ void add(GreedyStats& a, const GreedyStats& b) {
 
 Partition vsa_partition(const VsaSurface& s, const VsaOptions& options, VsaStats* stats) {
   VsaStats st;
-  double t = now_ms();
+  auto t = std::chrono::steady_clock::now();
   SeedingOptions so = options.seeding;
   so.clusters = std::max<size_t>(1, options.proxies);
   Partition p = seed_partition(s, so, &st.seeding);
   st.seeded = p.cluster_count();
   st.component_clusters = absorb_unassigned(s, p);
-  st.seeding_ms = now_ms() - t;
-  t = now_ms();
+  st.seeding_ms = ms_since(t);
+  t = std::chrono::steady_clock::now();
 
   const size_t K = std::min(so.clusters, s.face_count());
   const size_t cap =
@@ -113,7 +109,7 @@ Partition vsa_partition(const VsaSurface& s, const VsaOptions& options, VsaStats
     }
   }
   p.recompute(s);
-  st.optimise_ms = now_ms() - t;
+  st.optimise_ms = ms_since(t);
   st.clusters = p.cluster_count();
   st.energy = p.energy();
   st.total_area = s.total_area;
@@ -123,14 +119,14 @@ Partition vsa_partition(const VsaSurface& s, const VsaOptions& options, VsaStats
 
 VsaResult simplify_vsa(const Mesh& mesh, const VsaOptions& options, std::string_view name) {
   VsaResult r;
-  double t = now_ms();
+  auto t = std::chrono::steady_clock::now();
   const VsaSurface s = prepare_surface(mesh, name);
-  const double prepare = now_ms() - t;
+  const double prepare = ms_since(t);
   Partition p = vsa_partition(s, options, &r.stats);
   r.stats.prepare_ms = prepare;
-  t = now_ms();
+  t = std::chrono::steady_clock::now();
   r.output = polygonize(s, p, options.meshing);
-  r.stats.meshing_ms = now_ms() - t;
+  r.stats.meshing_ms = ms_since(t);
   r.stats.clusters = p.cluster_count();
   r.stats.energy = p.energy();
   r.labels = std::move(p.label);

@@ -21,6 +21,7 @@
 #include <unordered_map>
 #include <utility>
 
+#include "core/timer.hpp"
 #include "corner_twins.hpp"
 #include "limn/mesh/topology.hpp"
 #include "shared_weights.hpp"
@@ -31,10 +32,6 @@ namespace {
 
 constexpr int kMaxDepth = 16;
 constexpr float kInf = kInfiniteSharpness;
-
-double ms_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
 
 // First ptex face of each cage face (one per quad, one per corner of any other face), and the
 // total at the end.

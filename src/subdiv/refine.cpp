@@ -34,6 +34,8 @@
 #include <stdexcept>
 
 #include "core/cpu.hpp"
+#include "core/parallel.hpp"
+#include "core/timer.hpp"
 #include "limn/mesh/topology.hpp"
 
 #if LIMN_X86_SIMD
@@ -46,20 +48,6 @@ namespace {
 
 constexpr float kInf = kInfiniteSharpness;
 constexpr int kMaxChannels = 16;
-
-template <class F>
-void parallel_range(size_t n, size_t grain, F&& body) {
-  if (n < 2 * grain) {
-    body(size_t(0), n);
-    return;
-  }
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, grain),
-                    [&](const tbb::blocked_range<size_t>& r) { body(r.begin(), r.end()); });
-}
-
-double ms_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
 
 // Sizes a vector to n elements of `value`, dropping any old buffer first so a level's arrays
 // never hold two copies at once.

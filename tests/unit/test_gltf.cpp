@@ -4,7 +4,7 @@
 
 #include <cstring>
 
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 #include "limn/mesh/shapes.hpp"
 
 namespace limn {

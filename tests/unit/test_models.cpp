@@ -6,7 +6,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 #include "limn/mesh/topology.hpp"
 #include "oracle.hpp"
 

@@ -6,7 +6,7 @@
 
 #include <iterator>
 
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 
 namespace limn {
 namespace {

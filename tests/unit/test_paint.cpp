@@ -6,7 +6,7 @@
 #include <random>
 #include <set>
 
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 #include "limn/paint/brush.hpp"
 #include "limn/paint/lookup.hpp"
 #include "limn/paint/surface.hpp"

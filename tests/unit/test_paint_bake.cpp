@@ -5,7 +5,7 @@
 
 #include <random>
 
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 #include "limn/paint/bake.hpp"
 #include "limn/paint/brush.hpp"
 #include "limn/paint/lookup.hpp"

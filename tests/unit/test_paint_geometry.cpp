@@ -11,12 +11,12 @@
 #include <limits>
 #include <random>
 
-#include "../../src/paint/geometry.hpp"
-#include "../../src/paint/octree_blocks.hpp"
-#include "../../src/paint/refine.hpp"
 #include "limn/mesh/shapes.hpp"
 #include "limn/paint/surface.hpp"
 #include "limn/paint/texture.hpp"
+#include "paint/geometry.hpp"
+#include "paint/octree_blocks.hpp"
+#include "paint/refine.hpp"
 #include "paint_oracle.hpp"
 
 namespace limn {

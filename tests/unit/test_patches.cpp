@@ -12,7 +12,7 @@
 #include <tuple>
 
 #include "deep_reference.hpp"
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 #include "limn/mesh/shapes.hpp"
 #include "limn/mesh/topology.hpp"
 #include "limn/subdiv/patches.hpp"

@@ -12,7 +12,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 
 #ifndef LIMN_TEST_DATA
 #define LIMN_TEST_DATA "tests/data"

@@ -10,7 +10,7 @@
 #include <random>
 #include <set>
 
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 #include "limn/mesh/shapes.hpp"
 #include "limn/paint/brush.hpp"
 #include "limn/paint/lookup.hpp"

@@ -10,7 +10,7 @@
 #include <numbers>
 #include <set>
 
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 #include "limn/simplify/curvature.hpp"
 #include "limn/simplify/vsa.hpp"
 #include "simplify_oracle.hpp"

@@ -8,7 +8,7 @@
 #include <string>
 
 #include "cgal_vsa.hpp"
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 #include "limn/simplify/vsa.hpp"
 #include "simplify_oracle.hpp"
 

@@ -10,7 +10,7 @@
 #include <set>
 #include <sstream>
 
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 #include "limn/simplify/validate.hpp"
 #include "simplify_oracle.hpp"
 

@@ -19,7 +19,7 @@
 #include <limits>
 #include <vector>
 
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 #include "limn/simplify/distance.hpp"
 #include "limn/simplify/vsa.hpp"
 #include "simplify_oracle.hpp"

@@ -14,7 +14,7 @@
 #include <set>
 #include <string>
 
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 #include "limn/mesh/topology.hpp"
 #include "limn/simplify/triangulate.hpp"
 #include "limn/simplify/validate.hpp"

@@ -6,10 +6,10 @@
 #include <map>
 #include <random>
 
-#include "../../src/subdiv/shared_weights.hpp"
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 #include "limn/mesh/shapes.hpp"
 #include "limn/subdiv/refine.hpp"
+#include "subdiv/shared_weights.hpp"
 
 namespace limn {
 namespace {

@@ -21,7 +21,7 @@
 #include <utility>
 #include <vector>
 
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 #include "limn/mesh/shapes.hpp"
 #include "limn/subdiv/refine.hpp"
 #include "osd_oracle.hpp"

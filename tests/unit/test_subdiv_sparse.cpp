@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 #include "limn/mesh/shapes.hpp"
 #include "limn/mesh/topology.hpp"
 #include "limn/subdiv/refine.hpp"

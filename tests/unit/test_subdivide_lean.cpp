@@ -8,7 +8,7 @@
 #include <set>
 #include <tuple>
 
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 #include "limn/mesh/shapes.hpp"
 #include "limn/subdiv/refine.hpp"
 #include "random_cage.hpp"

@@ -5,7 +5,7 @@
 
 #include <filesystem>
 
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 #include "limn/mesh/shapes.hpp"
 #include "limn/mesh/topology.hpp"
 #include "limn/subdiv/depth.hpp"

@@ -16,7 +16,7 @@
 #include <limits>
 #include <unordered_set>
 
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 #include "text_number.hpp"
 
 namespace limn {

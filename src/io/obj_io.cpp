@@ -17,7 +17,7 @@
 #include <istream>
 #include <streambuf>
 
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 #include "text_number.hpp"
 
 namespace limn {

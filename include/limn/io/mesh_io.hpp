@@ -1,4 +1,6 @@
-// limn mesh I/O: OBJ (with OpenSubdiv `t` tags), PLY (ascii, binary LE/BE), OFF; binary glTF out.
+// limn io: mesh files. OBJ (with OpenSubdiv `t` tags), PLY (ascii, binary LE/BE), OFF; binary
+// glTF out. The target limn::io (src/io/), apart from limn::mesh so that a program using only
+// the algorithms links no file-format package (tinyobjloader, tinygltf).
 //
 // Readers are strict: any malformed, truncated or hostile input throws InputError with one line
 // naming the file, the line or element, and the problem. Header counts are checked against the
@@ -10,6 +12,7 @@
 #include <string>
 #include <string_view>
 
+#include "limn/mesh/file.hpp"
 #include "limn/mesh/mesh.hpp"
 
 namespace limn {
@@ -45,13 +48,6 @@ std::string write_mesh_memory(const Mesh& mesh, MeshFormat format, bool ascii_pl
 /// Writes a mesh atomically (temp file in the same folder, then rename). Throws InputError for a
 /// format that cannot be chosen, std::runtime_error when the file cannot be written.
 void write_mesh(const Mesh& mesh, const std::filesystem::path& path, const WriteOptions& opt = {});
-
-/// Writes bytes to `path` atomically: a temporary file beside it, flushed, then renamed over it.
-/// Throws std::runtime_error naming the path on failure; the old file is then untouched.
-void write_file_atomic(const std::filesystem::path& path, std::string_view bytes);
-
-/// Reads a whole file. Throws InputError for missing, unreadable or directory paths.
-std::string read_file(const std::filesystem::path& path);
 
 /// Per-format writers (what write_mesh dispatches to), appending to `out`.
 void write_obj(const Mesh& mesh, std::string& out);

@@ -6,7 +6,7 @@
 #include <cstring>
 #include <sstream>
 
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 
 namespace limn {
 

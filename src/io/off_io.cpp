@@ -11,7 +11,7 @@
 #include <cmath>
 #include <cstring>
 
-#include "limn/mesh/io.hpp"
+#include "limn/io/mesh_io.hpp"
 #include "text_number.hpp"
 
 namespace limn {
