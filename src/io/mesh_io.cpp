@@ -24,21 +24,6 @@ MeshFormat format_from_path(const std::filesystem::path& path) {
   return format_from_name(path.extension().string());
 }
 
-const char* format_name(MeshFormat f) {
-  switch (f) {
-    case MeshFormat::obj:
-      return "obj";
-    case MeshFormat::ply:
-      return "ply";
-    case MeshFormat::off:
-      return "off";
-    case MeshFormat::glb:
-      return "glb";
-    default:
-      return "auto";
-  }
-}
-
 namespace {
 
 MeshFormat sniff(std::string_view d) {

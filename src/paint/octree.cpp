@@ -346,12 +346,6 @@ void OctreeTexture::to_unit(const float p[3], double u[3]) const {
   for (int k = 0; k < 3; ++k) u[k] = (double(p[k]) - double(origin_[k])) * scale / 65536.0;
 }
 
-void OctreeTexture::cell_center(int level, uint32_t x, uint32_t y, uint32_t z, float out[3]) const {
-  const double s = double(size_) / double(1u << level);
-  const uint32_t i[3] = {x, y, z};
-  for (int k = 0; k < 3; ++k) out[k] = float(double(origin_[k]) + (double(i[k]) + 0.5) * s);
-}
-
 bool OctreeTexture::operator==(const OctreeTexture& o) const {
   auto trimmed = [](const std::vector<std::vector<uint32_t>>& f) {
     size_t n = f.size();

@@ -16,6 +16,47 @@
 
 namespace limn {
 
+/// A node a walk reached: a general node or a brick, its level and its cell there.
+struct OctreeSampler::CacheSlot {
+  int level = -1;
+  bool brick = false;
+  uint32_t ptr = 0, info = 0, x = 0, y = 0, z = 0;
+};
+struct OctreeSampler::Cache {
+  /// The last four nodes reached, most recent first: the 8 taps of a filtered lookup
+  /// straddle up to a few bricks, and one slot would thrash between them.
+  CacheSlot slot[4];
+  /// The brick table: bricks a filtered lookup read its taps from, in 64 slots by the low two
+  /// bits of their cell's coordinates (slot x | y << 2 | z << 4): the up to 8 bricks one
+  /// lookup's taps straddle, and their neighbours along a coherent path, without evicting
+  /// each other (four slots keep one brick in two a lookup needs in Morton order). Bricks
+  /// used again are kept unpacked, a byte and two samples per cell (37 KB in all), so a tap
+  /// costs two reads instead of mask ranks, a tag nibble and a sample offset, and a coherent
+  /// path unpacks a brick once for the ~10 lookups it makes there. Entry e of a cell = slot *
+  /// 64 + the cell's Morton index in the brick (as in its mask).
+  static constexpr int kSlotBits = 2;  ///< bits of each coordinate naming a slot
+  static constexpr int kSlots = 1 << (3 * kSlotBits);
+  /// The brick cell's level and coordinates (0: none), bit 62 set once the brick is unpacked:
+  /// on its second use, or its first along a coherent path (see `table_hits`), so random
+  /// lookups, which use a brick once, do not pay for it.
+  uint64_t brick_key[kSlots] = {};
+  uint64_t brick_mask[kSlots] = {};  ///< the brick's occupancy mask
+  uint32_t brick_word[kSlots] = {};  ///< its brick word (block address and double flag)
+  /// Per entry: the cell's tag in bits 0-3, bit 4 when it has a front sample, bit 5 a back
+  /// one (0 for an empty cell); 3 bytes more, so every entry can be read as 4 bytes.
+  uint8_t brick_cell[kSlots * 64 + 3] = {};
+  /// Per entry e: at 2e the front sample, at 2e + 1 the back one (or the front again).
+  Rgba8 brick_color[kSlots * 64 * 2] = {};
+  int brick_level = -1;  ///< the level of the last brick put in the table
+  /// How often recent lookups found all their taps' bricks in the table (a moving average,
+  /// 0-256): above half, a brick is unpacked on its first use, since the lookups that follow
+  /// will read it again.
+  uint32_t table_hits = 0;
+  /// The general node the last walk into a brick came through: its other bricks are one
+  /// step away when a coherent path leaves the cached ones.
+  CacheSlot parent;
+};
+
 namespace {
 
 constexpr int kD = octree::kMaxDepth;
@@ -805,17 +846,25 @@ OctreeIndex::OctreeIndex(const OctreeTexture& t, int level) : level_(std::clamp(
 }
 
 OctreeSampler::OctreeSampler(const OctreeTexture& t, const OctreeIndex* index)
-    : t_(&t), index_(index) {
+    : t_(&t), index_(index), cache_(std::make_unique<Cache>()) {
   for (int k = 0; k < 3; ++k) origin_[k] = t.origin()[k];
   scale_ = double(1u << kD) / double(t.size());
+}
+
+OctreeSampler::~OctreeSampler() = default;
+OctreeSampler::OctreeSampler(OctreeSampler&&) noexcept = default;
+OctreeSampler& OctreeSampler::operator=(OctreeSampler&&) noexcept = default;
+
+void OctreeSampler::reset() {
+  *cache_ = Cache{};
 }
 
 bool OctreeSampler::nearest_at(uint32_t x, uint32_t y, uint32_t z, const float* n, Rgba8& out,
                                int* level) {
   out = t_->background();
   const uint32_t* pool = t_->words().data();
-  return fast_walk() ? walk_nearest_fast(pool, index_, cache_, x, y, z, n, out, level)
-                     : walk_nearest_generic(pool, index_, cache_, x, y, z, n, out, level);
+  return fast_walk() ? walk_nearest_fast(pool, index_, *cache_, x, y, z, n, out, level)
+                     : walk_nearest_generic(pool, index_, *cache_, x, y, z, n, out, level);
 }
 
 bool OctreeSampler::nearest(const float p[3], const float* n, Rgba8& out, int* level) {
@@ -910,8 +959,8 @@ bool OctreeSampler::trilinear(const double u[3], int level, const float* n, bool
   if (!averages) {
     int deepest = level, reach = level;
     return fast_walk()
-               ? walk_trilinear_fast(pool, index_, cache_, u, level, n, acc, deepest, reach)
-               : walk_trilinear_generic(pool, index_, cache_, u, level, n, acc, deepest, reach);
+               ? walk_trilinear_fast(pool, index_, *cache_, u, level, n, acc, deepest, reach)
+               : walk_trilinear_generic(pool, index_, *cache_, u, level, n, acc, deepest, reach);
   }
   // Mip levels (node averages): not the hot path.
   const double cells = double(1u << level);
@@ -968,8 +1017,8 @@ bool OctreeSampler::filtered(const float p[3], const float* n, float footprint, 
   const double size = double(t_->size());
   int at_leaf =
       fast_walk()
-          ? walk_filtered_fast(pool, index_, cache_, c, u, n, footprint, size, leaf_level, acc)
-          : walk_filtered_generic(pool, index_, cache_, c, u, n, footprint, size, leaf_level, acc);
+          ? walk_filtered_fast(pool, index_, *cache_, c, u, n, footprint, size, leaf_level, acc)
+          : walk_filtered_generic(pool, index_, *cache_, c, u, n, footprint, size, leaf_level, acc);
   bool any = at_leaf > 0;
   if (at_leaf < 0) {
     const double lf =

@@ -78,29 +78,4 @@ Partition partition_from_labels(const VsaSurface& s, std::span<const uint32_t> l
   return p;
 }
 
-bool clusters_connected(const VsaSurface& s, const Partition& p) {
-  const size_t nf = s.face_count();
-  std::vector<uint8_t> seen(nf, 0);
-  std::vector<uint32_t> stack;
-  const Mesh& m = *s.mesh;
-  for (size_t k = 0; k < p.cluster_count(); ++k) {
-    if (p.size[k] == 0) continue;
-    const uint32_t f0 = p.any_face[k];
-    if (f0 == kNone || p.label[f0] != k) return false;
-    size_t reached = 1;
-    seen[f0] = 1;
-    stack.push_back(f0);
-    while (!stack.empty()) {
-      const uint32_t f = stack.back();
-      stack.pop_back();
-      for (uint32_t c = m.face_offsets[f]; c < m.face_offsets[f + 1]; ++c) {
-        const uint32_t g = s.across(c);
-        if (g != kNone && !seen[g] && p.label[g] == k) seen[g] = 1, ++reached, stack.push_back(g);
-      }
-    }
-    if (reached != p.size[k]) return false;
-  }
-  return true;
-}
-
 }  // namespace limn

@@ -23,7 +23,6 @@ enum class MeshFormat { automatic, obj, ply, off, glb };
 MeshFormat format_from_name(std::string_view name);
 /// Format from the file extension; `automatic` when unknown.
 MeshFormat format_from_path(const std::filesystem::path& path);
-const char* format_name(MeshFormat format);
 
 /// Reads a mesh. `format == automatic` picks by extension, then by the file's first bytes.
 /// Throws InputError for unreadable paths, directories and bad content. O(file size).

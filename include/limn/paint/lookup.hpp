@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "limn/paint/texture.hpp"
@@ -42,6 +43,9 @@ class OctreeSampler {
  public:
   /// `index` (may be null): an OctreeIndex of the same texture, for random access.
   explicit OctreeSampler(const OctreeTexture& t, const OctreeIndex* index = nullptr);
+  ~OctreeSampler();
+  OctreeSampler(OctreeSampler&&) noexcept;
+  OctreeSampler& operator=(OctreeSampler&&) noexcept;
 
   /// Nearest: the colour of the leaf holding p, the sample facing n (n null: the front sample;
   /// n need not be unit). False, with `out` = background, when p is outside the cube, no leaf
@@ -66,7 +70,7 @@ class OctreeSampler {
   bool filtered(const float p[3], const float* n, float footprint, float rgba[4]);
 
   /// Forgets the cache.
-  void reset() { cache_ = Cache{}; }
+  void reset();
 
   /// Many lookups at once, with the results of `nearest` / `filtered` for each point (p and n:
   /// 3 floats per point; n may be null). Points go in groups of 16 whose walks first descend in
@@ -86,46 +90,9 @@ class OctreeSampler {
   /// above that level (its sample facing n), or the average of the node at that level.
   bool cell_value(uint32_t x, uint32_t y, uint32_t z, int level, const float* n, Rgba8& out);
 
-  /// A node a walk reached: a general node or a brick, its level and its cell there.
-  struct CacheSlot {
-    int level = -1;
-    bool brick = false;
-    uint32_t ptr = 0, info = 0, x = 0, y = 0, z = 0;
-  };
-  struct Cache {
-    /// The last four nodes reached, most recent first: the 8 taps of a filtered lookup
-    /// straddle up to a few bricks, and one slot would thrash between them.
-    CacheSlot slot[4];
-    /// The brick table: bricks a filtered lookup read its taps from, in 64 slots by the low two
-    /// bits of their cell's coordinates (slot x | y << 2 | z << 4): the up to 8 bricks one
-    /// lookup's taps straddle, and their neighbours along a coherent path, without evicting
-    /// each other (four slots keep one brick in two a lookup needs in Morton order). Bricks
-    /// used again are kept unpacked, a byte and two samples per cell (37 KB in all), so a tap
-    /// costs two reads instead of mask ranks, a tag nibble and a sample offset, and a coherent
-    /// path unpacks a brick once for the ~10 lookups it makes there. Entry e of a cell = slot *
-    /// 64 + the cell's Morton index in the brick (as in its mask).
-    static constexpr int kSlotBits = 2;  ///< bits of each coordinate naming a slot
-    static constexpr int kSlots = 1 << (3 * kSlotBits);
-    /// The brick cell's level and coordinates (0: none), bit 62 set once the brick is unpacked:
-    /// on its second use, or its first along a coherent path (see `table_hits`), so random
-    /// lookups, which use a brick once, do not pay for it.
-    uint64_t brick_key[kSlots] = {};
-    uint64_t brick_mask[kSlots] = {};  ///< the brick's occupancy mask
-    uint32_t brick_word[kSlots] = {};  ///< its brick word (block address and double flag)
-    /// Per entry: the cell's tag in bits 0-3, bit 4 when it has a front sample, bit 5 a back
-    /// one (0 for an empty cell); 3 bytes more, so every entry can be read as 4 bytes.
-    uint8_t brick_cell[kSlots * 64 + 3] = {};
-    /// Per entry e: at 2e the front sample, at 2e + 1 the back one (or the front again).
-    Rgba8 brick_color[kSlots * 64 * 2] = {};
-    int brick_level = -1;  ///< the level of the last brick put in the table
-    /// How often recent lookups found all their taps' bricks in the table (a moving average,
-    /// 0-256): above half, a brick is unpacked on its first use, since the lookups that follow
-    /// will read it again.
-    uint32_t table_hits = 0;
-    /// The general node the last walk into a brick came through: its other bricks are one
-    /// step away when a coherent path leaves the cached ones.
-    CacheSlot parent;
-  };
+  /// The nodes and bricks recent walks reached (src/paint/octree_lookup.cpp).
+  struct CacheSlot;
+  struct Cache;
 
  private:
   /// Prefetches the walks of up to 16 points (when `prefetch`); returns whether they follow a
@@ -137,7 +104,7 @@ class OctreeSampler {
   const OctreeTexture* t_;
   const OctreeIndex* index_;
   double origin_[3], scale_;  ///< scale_: the cube's size
-  Cache cache_;
+  std::unique_ptr<Cache> cache_;
 };
 
 /// One nearest lookup without a cache (see OctreeSampler::nearest).

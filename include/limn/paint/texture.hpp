@@ -222,8 +222,6 @@ class OctreeTexture {
   /// Texture-space coordinates of a world point: (p - origin) * (65536 / size) / 65536, in
   /// [0,1)^3 inside the cube (the mapping every lookup uses). O(1).
   void to_unit(const float p[3], double u[3]) const;
-  /// World centre of cell (x, y, z) at `level`. O(1).
-  void cell_center(int level, uint32_t x, uint32_t y, uint32_t z, float out[3]) const;
 
   /// Counts, bytes and depth. O(pool).
   OctreeTextureStats stats() const;

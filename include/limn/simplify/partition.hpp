@@ -54,7 +54,4 @@ struct Partition {
 Partition partition_from_labels(const VsaSurface& s, std::span<const uint32_t> labels,
                                 size_t clusters);
 
-/// Whether every non-empty cluster is edge-connected. O(faces).
-bool clusters_connected(const VsaSurface& s, const Partition& p);
-
 }  // namespace limn
