@@ -12,6 +12,36 @@
 
 #include "limn/paint/texture.hpp"
 
+namespace limn::octree {
+
+// The pool's words, as the layout in include/limn/paint/texture.hpp describes them.
+/// Cell kinds inside a general node.
+enum class CellKind : uint8_t { empty, leaf, general, brick };
+
+/// Bits of a general node's info word.
+inline constexpr uint32_t occupied(uint32_t info) {
+  return info & 255u;
+}
+inline constexpr uint32_t leaves(uint32_t info) {
+  return (info >> 8) & 255u;
+}
+inline constexpr uint32_t bricks(uint32_t info) {
+  return (info >> 16) & 255u;
+}
+inline constexpr uint32_t doubles(uint32_t info) {
+  return (info >> 24) & 255u;
+}
+inline constexpr uint32_t generals(uint32_t info) {
+  return occupied(info) & ~leaves(info) & ~bricks(info);
+}
+inline constexpr uint32_t make_info(uint32_t occ, uint32_t leaf, uint32_t brick, uint32_t dbl) {
+  return (occ & 255u) | (leaf & 255u) << 8 | (brick & 255u) << 16 | (dbl & 255u) << 24;
+}
+inline constexpr uint32_t kBrickDoubleFlag = 0x80000000u;
+inline constexpr uint32_t kMaxPoolWords = 0x7ffffffeu;  ///< brick words keep 31 bits of address
+
+}  // namespace limn::octree
+
 namespace limn::detail {
 
 using octree::CellKind;

@@ -16,6 +16,7 @@
 #include <tbb/task_arena.h>
 
 #include "core/cpu.hpp"
+#include "surface_impl.hpp"
 
 namespace limn::detail {
 
@@ -990,8 +991,8 @@ std::shared_ptr<const Refiner::StartLists> Refiner::start_lists() const {
   if (start_) return start_;
   const double size = double(ed_.texture().size());
   {
-    std::lock_guard<std::mutex> lock(s_.derived_mutex_);
-    auto kept = std::static_pointer_cast<const StartLists>(s_.derived_);
+    std::lock_guard<std::mutex> lock(s_.impl().derived_mutex);
+    auto kept = std::static_pointer_cast<const StartLists>(s_.impl().derived);
     if (kept && kept->size == size && kept->origin[0] == origin_[0] &&
         kept->origin[1] == origin_[1] && kept->origin[2] == origin_[2])
       return kept;
@@ -1053,8 +1054,8 @@ std::shared_ptr<const Refiner::StartLists> Refiner::start_lists() const {
   for (const auto& hits : parts)
     for (const auto& h : hits) lists->tris[pos[h.first]++] = h.second;
   {
-    std::lock_guard<std::mutex> lock(s_.derived_mutex_);
-    s_.derived_ = lists;
+    std::lock_guard<std::mutex> lock(s_.impl().derived_mutex);
+    s_.impl().derived = lists;
   }
   return lists;
 }

@@ -2,8 +2,6 @@
 // closest points and the box queries that decide where the octree may refine.
 #include "limn/paint/surface.hpp"
 
-#include <embree3/rtcore.h>
-
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -12,6 +10,7 @@
 
 #include "geometry.hpp"
 #include "limn/paint/texture.hpp"
+#include "surface_impl.hpp"
 
 namespace limn {
 
@@ -78,17 +77,7 @@ double PaintCamera::world_per_pixel(const float p[3]) const {
   return 2.0 * z * fr.tan_half / height;
 }
 
-struct PaintSurface::Embree {
-  RTCDevice device = nullptr;
-  RTCScene scene = nullptr;
-  bool ray16 = false;  // 16-ray packets native (AVX-512): a little faster than 8 there
-  ~Embree() {
-    if (scene) rtcReleaseScene(scene);
-    if (device) rtcReleaseDevice(device);
-  }
-};
-
-PaintSurface::PaintSurface(const Mesh& mesh) : embree_(std::make_unique<Embree>()) {
+PaintSurface::PaintSurface(const Mesh& mesh) : impl_(std::make_unique<Impl>()) {
   validate(mesh, "mesh");
   std::vector<uint32_t> tris;
   for (size_t f = 0; f < mesh.face_count(); ++f) {
@@ -125,16 +114,16 @@ PaintSurface::PaintSurface(const Mesh& mesh) : embree_(std::make_unique<Embree>(
     back_[t] = back;
   }
 
-  embree_->device = rtcNewDevice(nullptr);
-  if (!embree_->device) throw std::runtime_error("Embree: cannot create a device");
-  embree_->ray16 =
-      rtcGetDeviceProperty(embree_->device, RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED) != 0;
-  embree_->scene = rtcNewScene(embree_->device);
-  rtcSetSceneBuildQuality(embree_->scene, RTC_BUILD_QUALITY_HIGH);
+  impl_->device = rtcNewDevice(nullptr);
+  if (!impl_->device) throw std::runtime_error("Embree: cannot create a device");
+  impl_->ray16 =
+      rtcGetDeviceProperty(impl_->device, RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED) != 0;
+  impl_->scene = rtcNewScene(impl_->device);
+  rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
   // Watertight: a ray through a shared vertex or edge must not slip between the triangles (a
   // missed occluder would paint through it, a missed pick would drop a dab).
-  rtcSetSceneFlags(embree_->scene, RTC_SCENE_FLAG_ROBUST);
-  RTCGeometry g = rtcNewGeometry(embree_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST);
+  RTCGeometry g = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
   float* vb = static_cast<float*>(rtcSetNewGeometryBuffer(
       g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.vertex_count()));
   std::copy(mesh.positions.begin(), mesh.positions.end(), vb);
@@ -142,9 +131,9 @@ PaintSurface::PaintSurface(const Mesh& mesh) : embree_(std::make_unique<Embree>(
       g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), nt));
   std::copy(tris.begin(), tris.end(), ib);
   rtcCommitGeometry(g);
-  rtcAttachGeometry(embree_->scene, g);
+  rtcAttachGeometry(impl_->scene, g);
   rtcReleaseGeometry(g);
-  rtcCommitScene(embree_->scene);
+  rtcCommitScene(impl_->scene);
 }
 
 PaintSurface::~PaintSurface() = default;
@@ -239,7 +228,7 @@ bool PaintSurface::closest_point(const float p[3], float max_dist, SurfaceHit& h
   pq.radius = q.best;
   RTCPointQueryContext ctx;
   rtcInitPointQueryContext(&ctx);
-  rtcPointQuery(embree_->scene, &pq, &ctx, &closest_callback, &q);
+  rtcPointQuery(impl_->scene, &pq, &ctx, &closest_callback, &q);
   if (q.tri == UINT32_MAX || q.best > max_dist) return false;
   hit.p[0] = q.q.x, hit.p[1] = q.q.y, hit.p[2] = q.q.z;
   std::copy_n(normal(q.tri), 3, hit.n);
@@ -259,7 +248,7 @@ bool PaintSurface::intersect(const float org[3], const float dir[3], float tnear
   rh.ray.time = 0, rh.ray.mask = 0xffffffffu, rh.ray.id = 0, rh.ray.flags = 0;
   rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-  rtcIntersect1(embree_->scene, &ctx, &rh);
+  rtcIntersect1(impl_->scene, &ctx, &rh);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
   hit.distance = rh.ray.tfar;
   for (int k = 0; k < 3; ++k) hit.p[k] = org[k] + rh.ray.tfar * dir[k];
@@ -276,7 +265,7 @@ bool PaintSurface::occluded(const float org[3], const float dir[3], float tnear,
   r.dir_x = dir[0], r.dir_y = dir[1], r.dir_z = dir[2];
   r.tnear = tnear, r.tfar = tfar;
   r.time = 0, r.mask = 0xffffffffu, r.id = 0, r.flags = 0;
-  rtcOccluded1(embree_->scene, &ctx, &r);
+  rtcOccluded1(impl_->scene, &ctx, &r);
   return r.tfar == -INFINITY;
 }
 
@@ -310,8 +299,8 @@ void PaintSurface::occluded_many(size_t count, const float* org, const float* di
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-  RTCScene scene = embree_->scene;
-  if (embree_->ray16)
+  RTCScene scene = impl_->scene;
+  if (impl_->ray16)
     occluded_packets<16, RTCRay16>(
         count, org, dir, tnear, tfar, occluded,
         [&](const int* valid, RTCRay16* r) { rtcOccluded16(valid, scene, &ctx, r); });
@@ -330,7 +319,7 @@ void PaintSurface::triangles_near(const float c[3], float r, std::vector<uint32_
   pq.radius = r;
   RTCPointQueryContext ctx;
   rtcInitPointQueryContext(&ctx);
-  rtcPointQuery(embree_->scene, &pq, &ctx, &gather_callback, &q);
+  rtcPointQuery(impl_->scene, &pq, &ctx, &gather_callback, &q);
   auto it = std::remove_if(out.begin() + std::ptrdiff_t(first), out.end(),
                            [&](uint32_t t) { return degenerate(t); });
   out.erase(it, out.end());
@@ -356,14 +345,14 @@ void PaintSurface::triangles_in_box(const float c[3], float h, float slack,
                                     std::vector<uint32_t>& out) const {
   const size_t first = out.size();
   BoxQuery q{this, &out, {c[0], c[1], c[2]}, h, slack};
-  ask_box(embree_->scene, q, &box_callback);
+  ask_box(impl_->scene, q, &box_callback);
   sort_unique(out, first, triangle_count());
 }
 
 void PaintSurface::box_candidates(const float c[3], float h, float slack,
                                   std::vector<uint32_t>& out) const {
   BoxQuery q{this, &out, {c[0], c[1], c[2]}, h, slack};
-  ask_box(embree_->scene, q, &candidate_callback);
+  ask_box(impl_->scene, q, &candidate_callback);
 }
 
 }  // namespace limn

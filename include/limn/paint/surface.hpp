@@ -4,16 +4,11 @@
 
 #include <cstdint>
 #include <memory>
-#include <mutex>
 #include <vector>
 
 #include "limn/mesh/mesh.hpp"
 
 namespace limn {
-
-namespace detail {
-class Refiner;
-}
 
 /// A pinhole camera (the subdiv layer's conventions): pixel x to the right, y down, pixel centres
 /// at +0.5, vertical field of view in degrees.
@@ -42,8 +37,8 @@ struct SurfaceHit {
 };
 
 /// Triangles (each face fanned from its first corner), unit face normals and an Embree BVH.
-/// Read-only after construction (but for a table the paint layer derives once, under a lock);
-/// the queries are thread-safe.
+/// Read-only after construction (but for what the paint layer derives once, under a lock); the
+/// queries are thread-safe.
 class PaintSurface {
  public:
   /// Builds the BVH. Throws InputError when the mesh has no faces. O(T log T).
@@ -95,19 +90,18 @@ class PaintSurface {
   /// answer, in the BVH's order, a triangle possibly twice. O(log T + answer).
   void box_candidates(const float c[3], float h, float slack, std::vector<uint32_t>& out) const;
 
+  /// The surface's Embree scene and what the paint layer keeps with it (internal:
+  /// src/paint/surface_impl.hpp).
+  struct Impl;
+  const Impl& impl() const { return *impl_; }
+
  private:
   std::vector<float> corners_, normals_;
   std::vector<uint32_t> faces_;
   std::vector<uint8_t> tags_;   // per triangle: its normal's tag
   std::vector<uint16_t> back_;  // per triangle: bit k set when its normal is on side 1 of tag k
   Box bounds_;
-  struct Embree;
-  std::unique_ptr<Embree> embree_;
-  // The paint layer's refiner keeps here, per surface, the triangle lists of a texture cube's
-  // start cells (Refiner::start_list): made once, read by every dab refining one of them.
-  friend class detail::Refiner;
-  mutable std::mutex derived_mutex_;
-  mutable std::shared_ptr<const void> derived_;
+  std::unique_ptr<Impl> impl_;
 };
 
 }  // namespace limn

@@ -101,31 +101,6 @@ inline constexpr int kMaxDepth = 16;
 /// Depth of the coarse tree a new texture starts with (the paper's 4^3 / 8^3 start).
 inline constexpr int kStartDepth = 3;
 
-/// Cell kinds inside a general node.
-enum class CellKind : uint8_t { empty, leaf, general, brick };
-
-/// Bits of a general node's info word.
-inline constexpr uint32_t occupied(uint32_t info) {
-  return info & 255u;
-}
-inline constexpr uint32_t leaves(uint32_t info) {
-  return (info >> 8) & 255u;
-}
-inline constexpr uint32_t bricks(uint32_t info) {
-  return (info >> 16) & 255u;
-}
-inline constexpr uint32_t doubles(uint32_t info) {
-  return (info >> 24) & 255u;
-}
-inline constexpr uint32_t generals(uint32_t info) {
-  return occupied(info) & ~leaves(info) & ~bricks(info);
-}
-inline constexpr uint32_t make_info(uint32_t occ, uint32_t leaf, uint32_t brick, uint32_t dbl) {
-  return (occ & 255u) | (leaf & 255u) << 8 | (brick & 255u) << 16 | (dbl & 255u) << 24;
-}
-inline constexpr uint32_t kBrickDoubleFlag = 0x80000000u;
-inline constexpr uint32_t kMaxPoolWords = 0x7ffffffeu;  ///< brick words keep 31 bits of address
-
 /// Number of direction codes (tags 1..kTagCount are directions, 0 is none).
 inline constexpr int kTagCount = 14;
 /// Unit direction of tag t (t in 1..kTagCount); (0,0,0) for tag 0. O(1).
