@@ -58,6 +58,7 @@
 #include <openvdb/openvdb.h>
 #pragma GCC diagnostic pop
 
+#include "clock.hpp"
 #include "limn/io/mesh_io.hpp"
 #include "limn/paint/brush.hpp"
 #include "limn/paint/lookup.hpp"
@@ -71,14 +72,10 @@ using namespace limn;
 
 namespace {
 
+using bench::median;
+using bench::now_ms;
 using bench::Sample;
 using bench::surface_points;
-
-double now_ms() {
-  return std::chrono::duration<double, std::milli>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
 
 // This thread's CPU time in ms: times with --cpu-clock (a busy machine's descheduling left
 // out).
@@ -92,11 +89,6 @@ bool g_cpu_clock = false;
 // The clock lookups and dabs are timed with.
 double clock_ms() {
   return g_cpu_clock ? cpu_ms() : now_ms();
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0 : v[v.size() / 2];
 }
 
 std::string mib(double bytes) {

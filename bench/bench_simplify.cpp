@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "cgal_vsa.hpp"
+#include "clock.hpp"
 #include "limn/io/mesh_io.hpp"
 #include "limn/simplify/vsa.hpp"
 
@@ -29,16 +30,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-double now_ms() {
-  return std::chrono::duration<double, std::milli>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0.0 : v[v.size() / 2];
-}
+using limn::bench::median;
+using limn::bench::now_ms;
 
 // One 1-to-4 split of every triangle (edge midpoints shared between neighbours).
 limn::Mesh midpoint_split(const limn::Mesh& m) {

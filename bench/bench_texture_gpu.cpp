@@ -25,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "clock.hpp"
 #include "limn/io/mesh_io.hpp"
 #include "limn/paint/brush.hpp"
 #include "limn/paint/lookup.hpp"
@@ -39,16 +40,8 @@ using namespace limn;
 
 namespace {
 
-double now_ms() {
-  return std::chrono::duration<double, std::milli>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
+using bench::median;
+using bench::now_ms;
 
 struct CpuResults {
   std::vector<Rgba8> nearest;

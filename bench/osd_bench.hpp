@@ -20,23 +20,13 @@
 #include <opensubdiv/far/topologyDescriptor.h>
 #pragma GCC diagnostic pop
 
+#include "clock.hpp"
 #include "limn/mesh/mesh.hpp"
 #include "limn/subdiv/refine.hpp"
 
 namespace limn::bench {
 
 namespace osd = OpenSubdiv::OPENSUBDIV_VERSION;
-
-inline double now_ms() {
-  return std::chrono::duration<double, std::milli>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
-
-inline double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
 
 /// An unrefined OpenSubdiv refiner for `m` (creases, corners, holes, boundary and crease rules).
 inline std::unique_ptr<osd::Far::TopologyRefiner> osd_refiner(const Mesh& m) {

@@ -1,10 +1,10 @@
 // Cluster splits and merges.
-#include "limn/simplify/cluster_edit.hpp"
+#include "simplify/cluster_edit.hpp"
 
 #include <cmath>
 #include <stdexcept>
 
-#include "limn/simplify/seeding.hpp"
+#include "simplify/seeding.hpp"
 
 namespace limn {
 

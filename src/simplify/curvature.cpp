@@ -1,5 +1,5 @@
 // Meyer et al.'s angle-defect Gaussian curvature over mixed Voronoi areas.
-#include "limn/simplify/curvature.hpp"
+#include "simplify/curvature.hpp"
 
 #include <cmath>
 #include <numbers>

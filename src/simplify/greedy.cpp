@@ -1,11 +1,11 @@
 // Jin, Wu, Liu's local greedy optimiser of the L2,1 energy, driven by a queue of boundary edges.
-#include "limn/simplify/greedy.hpp"
+#include "simplify/greedy.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
-#include "limn/simplify/cluster_edit.hpp"
+#include "simplify/cluster_edit.hpp"
 
 namespace limn {
 

@@ -1,10 +1,10 @@
 // Lloyd relaxation of a VSA partition: fit, pick seeds, flood.
-#include "limn/simplify/lloyd.hpp"
+#include "simplify/lloyd.hpp"
 
 #include <algorithm>
 #include <limits>
 
-#include "limn/simplify/seeding.hpp"
+#include "simplify/seeding.hpp"
 
 namespace limn {
 

@@ -1,5 +1,5 @@
 // Anchors, chains, chain splitting, cluster polygons and their triangulation.
-#include "limn/simplify/polygonize.hpp"
+#include "simplify/polygonize.hpp"
 
 #include <algorithm>
 #include <array>
@@ -13,8 +13,8 @@
 #include <unordered_set>
 
 #include "core/vec3.hpp"
-#include "limn/simplify/cluster_edit.hpp"
-#include "limn/simplify/triangulate.hpp"
+#include "simplify/cluster_edit.hpp"
+#include "simplify/triangulate.hpp"
 
 namespace limn {
 

@@ -1,5 +1,5 @@
 // Adaptive (curvature) and random seeding, flooding of unassigned faces.
-#include "limn/simplify/seeding.hpp"
+#include "simplify/seeding.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 #include <queue>
 #include <random>
 
-#include "limn/simplify/curvature.hpp"
+#include "simplify/curvature.hpp"
 
 namespace limn {
 

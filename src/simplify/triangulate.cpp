@@ -1,5 +1,5 @@
 // Minimum-weight polygon triangulation by dynamic programming.
-#include "limn/simplify/triangulate.hpp"
+#include "simplify/triangulate.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -6,6 +6,11 @@
 #include <utility>
 
 #include "core/timer.hpp"
+#include "simplify/cluster_edit.hpp"
+#include "simplify/greedy.hpp"
+#include "simplify/lloyd.hpp"
+#include "simplify/polygonize.hpp"
+#include "simplify/seeding.hpp"
 
 namespace limn {
 

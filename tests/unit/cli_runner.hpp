@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -56,15 +57,32 @@ class CliTest : public ::testing::Test {
     return r;
   }
 
-  /// The names of the files in the scratch folder.
+  /// The names of the files in the scratch folder, sorted (to catch leftovers of failed writes).
   std::vector<std::string> files() const {
     std::vector<std::string> names;
     for (const auto& e : std::filesystem::directory_iterator(dir_))
       names.push_back(e.path().filename().string());
+    std::sort(names.begin(), names.end());
     return names;
   }
 
- private:
+  /// Writes `text` to a file of the scratch folder; returns its path.
+  std::filesystem::path write(const std::string& name, const std::string& text) const {
+    const std::filesystem::path p = dir_ / name;
+    std::ofstream(p, std::ios::binary) << text;
+    return p;
+  }
+
+  /// The path in single quotes, for a command line.
+  // (Appends rather than operator+: GCC 12's -Wrestrict misfires on the latter at -O3.)
+  static std::string q(const std::filesystem::path& p) {
+    std::string s(1, '\'');
+    s.append(p.string());
+    s.push_back('\'');
+    return s;
+  }
+
+  using Result = CliResult;
   std::filesystem::path dir_;
 };
 

@@ -11,8 +11,12 @@
 #include <set>
 
 #include "limn/io/mesh_io.hpp"
-#include "limn/simplify/curvature.hpp"
 #include "limn/simplify/vsa.hpp"
+#include "simplify/cluster_edit.hpp"
+#include "simplify/curvature.hpp"
+#include "simplify/greedy.hpp"
+#include "simplify/lloyd.hpp"
+#include "simplify/seeding.hpp"
 #include "simplify_oracle.hpp"
 
 namespace limn {

@@ -16,9 +16,10 @@
 
 #include "limn/io/mesh_io.hpp"
 #include "limn/mesh/topology.hpp"
-#include "limn/simplify/triangulate.hpp"
 #include "limn/simplify/validate.hpp"
 #include "limn/simplify/vsa.hpp"
+#include "simplify/polygonize.hpp"
+#include "simplify/triangulate.hpp"
 #include "simplify_oracle.hpp"
 
 namespace limn {

@@ -5,12 +5,6 @@ in vec3 t_col;
 in vec3 t_bary;
 uniform vec3 eye;
 out vec4 frag;
-// Compiled in, not a uniform: llvmpipe runs both sides of a branch on a uniform.
-#ifdef OUTLINE
-const bool outline = true;
-#else
-const bool outline = false;
-#endif
 void main() {
   float edge = 1e9;
   if (outline) {

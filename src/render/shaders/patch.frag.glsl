@@ -8,11 +8,6 @@ uniform vec3 base;
 uniform vec3 ramp[17];
 out vec4 frag;
 // Options are compiled in, not uniforms: llvmpipe runs both sides of a branch on a uniform.
-#ifdef OUTLINE
-const bool outline = true;
-#else
-const bool outline = false;
-#endif
 #ifdef DEPTH_COLORS
 const bool depth_colors = true;
 #else

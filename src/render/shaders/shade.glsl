@@ -1,5 +1,12 @@
 // shade: the shading shared by the patch and mesh programs: two-sided Blinn-Phong under a head
-// light, with an optional outline where `edge` (0 on an edge, growing inwards) is small.
+// light, with an optional outline where `edge` (0 on an edge, growing inwards) is small; the
+// program's `outline` flag (#define OUTLINE: compiled in, not a uniform, since llvmpipe runs both
+// sides of a branch on a uniform).
+#ifdef OUTLINE
+const bool outline = true;
+#else
+const bool outline = false;
+#endif
 vec3 shade(vec3 base, vec3 pos, vec3 nrm, vec3 eye, float edge, bool outline) {
   vec3 v = normalize(eye - pos);
   vec3 n = normalize(nrm);

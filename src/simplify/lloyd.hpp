@@ -9,19 +9,9 @@
 #include <cstddef>
 #include <vector>
 
-#include "limn/simplify/partition.hpp"
+#include "limn/simplify/vsa.hpp"
 
 namespace limn {
-
-struct LloydOptions {
-  size_t iterations = 30;        ///< at most this many partition + fit iterations
-  bool stop_when_stable = true;  ///< stop early when an iteration changes no label
-};
-
-struct LloydStats {
-  size_t iterations = 0;       ///< iterations run
-  std::vector<double> energy;  ///< E after each iteration
-};
 
 /// Runs Lloyd iterations on a complete partition (every face assigned; clusters edge-connected).
 /// O(iterations x F log F).

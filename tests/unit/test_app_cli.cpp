@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "cli_runner.hpp"
 #include "limn/io/mesh_io.hpp"
 #include "limn/mesh/topology.hpp"
 #include "limn/subdiv/patches.hpp"
@@ -20,58 +21,15 @@ namespace limn {
 namespace {
 
 namespace fs = std::filesystem;
+using test::slurp;
 using ::testing::HasSubstr;
 
-struct Result {
-  int code = -1;
-  std::string out, err;
-};
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-class Cli : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("limn-cli-" + std::to_string(::getpid()) + "-" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  Result limn(const std::string& args) {
-    const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
-    const std::string cmd = std::string("'") + LIMN_CLI + "' " + args + " >'" + out.string() +
-                            "' 2>'" + err.string() + "' </dev/null";
-    const int status = std::system(cmd.c_str());
-    Result r;
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    r.out = slurp(out), r.err = slurp(err);
-    fs::remove(out), fs::remove(err);
-    return r;
-  }
-  // Files in the scratch folder (to catch leftovers of failed writes).
-  std::vector<std::string> files() const {
-    std::vector<std::string> v;
-    for (const auto& e : fs::directory_iterator(dir_)) v.push_back(e.path().filename().string());
-    std::sort(v.begin(), v.end());
-    return v;
-  }
-  std::string q(const fs::path& p) const { return "'" + p.string() + "'"; }
-
-  fs::path dir_;
-};
+class Cli : public test::CliTest {};
 
 const fs::path kData = LIMN_TEST_DATA;
 
 TEST_F(Cli, VersionAndHelp) {
-  Result r = limn("--version");
+  test::CliResult r = limn("--version");
   EXPECT_EQ(r.code, 0);
   EXPECT_THAT(r.out, HasSubstr("limn 0."));
   EXPECT_EQ(limn("--help").code, 0);
@@ -95,7 +53,7 @@ TEST_F(Cli, EveryBadFileExitsTwoWithOneLineNamingIt) {
   size_t n = 0;
   for (const auto& e : fs::directory_iterator(kData / "bad")) {
     SCOPED_TRACE(e.path().string());
-    const Result r = limn("info " + q(e.path()));
+    const test::CliResult r = limn("info " + q(e.path()));
     EXPECT_EQ(r.code, 2);
     EXPECT_THAT(r.err, HasSubstr(e.path().filename().string()));
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
@@ -119,7 +77,7 @@ TEST_F(Cli, FailedConvertLeavesNoFileAndKeepsTheOldOne) {
 }
 
 TEST_F(Cli, DirectoryAndMissingPaths) {
-  Result r = limn("info " + q(dir_));
+  test::CliResult r = limn("info " + q(dir_));
   EXPECT_EQ(r.code, 2);
   EXPECT_THAT(r.err, HasSubstr("directory"));
   r = limn("info " + q(dir_ / "does-not-exist.obj"));
@@ -134,13 +92,14 @@ TEST_F(Cli, DirectoryAndMissingPaths) {
 }
 
 TEST_F(Cli, UnknownOutputExtensionIsBadUsage) {
-  const Result r = limn("convert " + q(kData / "nonmanifold.obj") + " " + q(dir_ / "x.stl"));
+  const test::CliResult r =
+      limn("convert " + q(kData / "nonmanifold.obj") + " " + q(dir_ / "x.stl"));
   EXPECT_EQ(r.code, 2);
   EXPECT_EQ(files(), std::vector<std::string>{});
 }
 
 TEST_F(Cli, NonManifoldIsReportedNotRejected) {
-  const Result r = limn("info --json " + q(kData / "nonmanifold.obj"));
+  const test::CliResult r = limn("info --json " + q(kData / "nonmanifold.obj"));
   ASSERT_EQ(r.code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j["non_manifold_edges"], 1);
@@ -151,7 +110,7 @@ TEST_F(Cli, NonManifoldIsReportedNotRejected) {
 }
 
 TEST_F(Cli, BomAndMixedLineEndings) {
-  const Result r = limn("info --json " + q(kData / "bom_mixed_endings.obj"));
+  const test::CliResult r = limn("info --json " + q(kData / "bom_mixed_endings.obj"));
   ASSERT_EQ(r.code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j["vertices"], 4);
@@ -162,7 +121,7 @@ TEST_F(Cli, BomAndMixedLineEndings) {
 TEST_F(Cli, InfoTextAndJsonAgree) {
   const fs::path cube = dir_ / "cube.obj";
   ASSERT_EQ(limn("shape cube -o " + q(cube)).code, 0);
-  const Result text = limn("info " + q(cube));
+  const test::CliResult text = limn("info " + q(cube));
   ASSERT_EQ(text.code, 0);
   EXPECT_THAT(text.out, HasSubstr("genus           0"));
   const auto j = nlohmann::json::parse(limn("info --json " + q(cube)).out);
@@ -213,11 +172,11 @@ TEST_F(Cli, GlbOpensInAGltfLoader) {
 }
 
 TEST_F(Cli, ShapeListAndDemo) {
-  const Result l = limn("shape --list");
+  const test::CliResult l = limn("shape --list");
   EXPECT_EQ(l.code, 0);
   for (const char* n : {"cube", "torus", "cage", "terrain", "torus-dense"})
     EXPECT_THAT(l.out, HasSubstr(n));
-  const Result d = limn("demo --quick -o " + q(dir_ / "demo"));
+  const test::CliResult d = limn("demo --quick -o " + q(dir_ / "demo"));
   ASSERT_EQ(d.code, 0) << d.err;
   const std::string md = slurp(dir_ / "demo" / "report.md");
   EXPECT_THAT(md, HasSubstr("| torus |"));
@@ -255,7 +214,8 @@ TEST_F(Cli, SubdivideUniformAndLimit) {
   const fs::path cage = dir_ / "cage.obj", out = dir_ / "s.obj";
   ASSERT_EQ(limn("shape cage -o " + q(cage)).code, 0);
   const Mesh m = read_mesh(cage);
-  const Result r = limn("subdivide " + q(cage) + " -o " + q(out) + " --uniform 2 --limit --json");
+  const test::CliResult r =
+      limn("subdivide " + q(cage) + " -o " + q(out) + " --uniform 2 --limit --json");
   ASSERT_EQ(r.code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
   // Level 1 has one quad per cage corner, level 2 four times as many; hole faces are dropped.
@@ -272,7 +232,7 @@ TEST_F(Cli, SubdivideUniformAndLimit) {
   }
   EXPECT_FALSE(s.crease_sharpness.empty());  // the infinitely sharp rim survives as tags
   for (const char* bad : {"--uniform 9", "--uniform -1", ""}) {
-    const Result b = limn("subdivide " + q(cage) + " -o " + q(dir_ / "x.obj") + " " + bad);
+    const test::CliResult b = limn("subdivide " + q(cage) + " -o " + q(dir_ / "x.obj") + " " + bad);
     EXPECT_EQ(b.code, 2) << bad;
   }
   EXPECT_FALSE(fs::exists(dir_ / "x.obj"));
@@ -282,7 +242,7 @@ TEST_F(Cli, SubdivideLeanWritesTheLastLevel) {
   const fs::path cage = dir_ / "cage.obj", out = dir_ / "lean.ply";
   ASSERT_EQ(limn("shape cage -o " + q(cage)).code, 0);
   const Mesh m = read_mesh(cage);
-  const Result r = limn("subdivide " + q(cage) + " -o " + q(out) + " --uniform 3 --json");
+  const test::CliResult r = limn("subdivide " + q(cage) + " -o " + q(out) + " --uniform 3 --json");
   ASSERT_EQ(r.code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
   ASSERT_EQ(j["levels"].size(), 4u);
@@ -300,7 +260,7 @@ TEST_F(Cli, SubdivideAdaptiveWritesAWatertightLimitSurface) {
   const fs::path cage = dir_ / "torus.obj", out = dir_ / "a.ply";
   ASSERT_EQ(limn("shape torus -o " + q(cage)).code, 0);
   const Mesh m = read_mesh(cage);
-  const Result r =
+  const test::CliResult r =
       limn("subdivide " + q(cage) + " -o " + q(out) + " --adaptive --depth 2 --tess 3 --json");
   ASSERT_EQ(r.code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
@@ -328,9 +288,10 @@ TEST_F(Cli, SubdivideAdaptiveToleranceFollowsTheCamera) {
   const fs::path cage = dir_ / "torus.obj";
   ASSERT_EQ(limn("shape torus -o " + q(cage)).code, 0);
   auto patches = [&](const std::string& camera) {
-    const Result r = limn("subdivide " + q(cage) + " -o " + q(dir_ / "d.ply") +
-                          " --adaptive --tolerance 1 --resolution 640x480 --depth-colors --json" +
-                          " --camera " + camera);
+    const test::CliResult r =
+        limn("subdivide " + q(cage) + " -o " + q(dir_ / "d.ply") +
+             " --adaptive --tolerance 1 --resolution 640x480 --depth-colors --json" + " --camera " +
+             camera);
     EXPECT_EQ(r.code, 0) << r.err;
     const auto j = nlohmann::json::parse(r.out);
     EXPECT_LE(double(j["estimated_max_error_px"]), 1.0);
@@ -340,7 +301,7 @@ TEST_F(Cli, SubdivideAdaptiveToleranceFollowsTheCamera) {
   EXPECT_GT(near, far);
   // Both error sources give a watertight surface within the tolerance they estimate.
   for (const char* errors : {"measured", "estimated"}) {
-    const Result r =
+    const test::CliResult r =
         limn("subdivide " + q(cage) + " -o " + q(dir_ / "e.ply") +
              " --adaptive --tolerance 1 --json --camera 0,2,2.5,0,0,0,45 --errors " + errors);
     ASSERT_EQ(r.code, 0) << r.err;
@@ -353,8 +314,8 @@ TEST_F(Cli, SubdivideAdaptiveToleranceFollowsTheCamera) {
   }
   // Screen-space tessellation: a closer camera gives more triangles, and stays watertight.
   auto triangles = [&](const std::string& camera) {
-    const Result r = limn("subdivide " + q(cage) + " -o " + q(dir_ / "s.ply") +
-                          " --adaptive --depth 2 --tess-px 5 --json --camera " + camera);
+    const test::CliResult r = limn("subdivide " + q(cage) + " -o " + q(dir_ / "s.ply") +
+                                   " --adaptive --depth 2 --tess-px 5 --json --camera " + camera);
     EXPECT_EQ(r.code, 0) << r.err;
     const Mesh m = read_mesh(dir_ / "s.ply");
     EXPECT_EQ(analyze(m, build_topology(m)).boundary_edges, 0u);
@@ -388,7 +349,7 @@ TEST_F(Cli, SubdivideAdaptiveRejectsBadOptions) {
                           "--uniform 1 --tess-px 4",
                           "--adaptive --tolerance 1 --errors guessed",
                           "--uniform 1 --errors estimated"}) {
-    const Result r = limn("subdivide " + q(cage) + " -o " + q(dir_ / "x.ply") + " " + bad);
+    const test::CliResult r = limn("subdivide " + q(cage) + " -o " + q(dir_ / "x.ply") + " " + bad);
     EXPECT_EQ(r.code, 2) << bad << ": " << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << bad << ": " << r.err;
   }
@@ -409,8 +370,9 @@ TEST_F(Cli, SubdivideAdaptiveDepthColoursAreDeeperNearTheCamera) {
                              std::to_string(cz + 0.6f * d) + "," + std::to_string(cx - 0.5f * d) +
                              "," + std::to_string(cy) + "," + std::to_string(cz) + ",50";
   const fs::path out = dir_ / "bigguy.ply";
-  const Result r = limn("subdivide " + q(big) + " -o " + q(out) +
-                        " --adaptive --tolerance 0.5 --tess 2 --depth-colors --camera " + camera);
+  const test::CliResult r =
+      limn("subdivide " + q(big) + " -o " + q(out) +
+           " --adaptive --tolerance 0.5 --tess 2 --depth-colors --camera " + camera);
   ASSERT_EQ(r.code, 0) << r.err;
   const Mesh m = read_mesh(out);
   ASSERT_EQ(m.colors.size(), 4 * m.vertex_count());

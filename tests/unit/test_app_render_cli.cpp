@@ -30,11 +30,6 @@ size_t drawn(const fs::path& png, int& w, int& h) {
   return n;
 }
 
-// A path in single quotes for the shell.
-std::string q(const fs::path& p) {
-  return fmt::format("'{}'", p.string());
-}
-
 TEST_F(RenderCli, AdaptiveSurfaceToPng) {
   const fs::path png = dir() / "bigguy.png";
   const test::CliResult r = limn(fmt::format(

@@ -16,38 +16,9 @@
 #include <utility>
 #include <vector>
 
-#include "limn/simplify/partition.hpp"
+#include "limn/simplify/vsa.hpp"
 
 namespace limn {
-
-struct GreedyOptions {
-  /// A move is taken only when |N_k| + |N_l| grows by more than this times the moved face's area
-  /// (so round-off cannot make two states alternate forever).
-  double min_gain = 1e-10;
-  /// Faces a connectivity check may visit when the O(1) test around the face is not conclusive;
-  /// beyond it the move is refused (never risking a disconnected cluster).
-  uint32_t search_budget = 32;
-  /// Once the queue runs dry, a cluster's boundary edges are scored again only when its proxy
-  /// normal has turned by more than this (about radians) since they were last all queued (edges
-  /// next to a move are always scored again). A move that turn could have made worthwhile lowers
-  /// E by at most about 4 x drift x the face's area; 0: every change counts, and the result is an
-  /// exact local minimum.
-  double drift = 1e-2;
-  /// Debug hook, called after every accepted move with the face, its old and new cluster and the
-  /// predicted drop of E (squared model units). Tests use it to check every move lowers E.
-  std::function<void(uint32_t face, uint32_t from, uint32_t to, double drop)> on_move;
-};
-
-struct GreedyStats {
-  size_t moves = 0;               ///< accepted moves
-  size_t evaluations = 0;         ///< boundary edges scored
-  size_t rounds = 0;              ///< times the queue ran dry and stale edges were queued again
-  size_t local_checks = 0;        ///< connectivity decided by looking around the face (O(1))
-  size_t search_checks = 0;       ///< connectivity decided by a bounded search
-  size_t refused_disconnect = 0;  ///< improving moves refused: they would split a cluster
-  size_t refused_budget = 0;      ///< improving moves refused: the search ran out of budget
-  double energy_before = 0, energy_after = 0;
-};
 
 /// Greedy optimiser state over a partition: the boundary-edge list, the queue and the
 /// per-edge and per-cluster stamps that tell which edges are stale. The partition is referenced,

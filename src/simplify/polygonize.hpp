@@ -18,37 +18,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "limn/simplify/partition.hpp"
+#include "limn/simplify/vsa.hpp"
 
 namespace limn {
-
-struct MeshingOptions {
-  /// Chains are split at their farthest vertex P while d(P, AB)/|AB| exceeds this.
-  double split_threshold = 0.5;
-  /// One polygon per cluster (a cluster with holes: one per piece its bridges cut it into;
-  /// a polygon with a repeated vertex or no area comes out as triangles); false: triangles.
-  bool polygons = false;
-};
-
-struct MeshingStats {
-  size_t anchors = 0;         ///< vertices where chains meet (including forced ones)
-  size_t forced_anchors = 0;  ///< anchors added on loops that had none
-  size_t chains = 0;
-  size_t kept_vertices = 0;   ///< output vertices
-  size_t forced_splits = 0;   ///< chain splits beyond the threshold, for validity
-  size_t bridges = 0;         ///< edges cutting a cluster with holes into simple polygons
-  size_t polygons = 0;        ///< polygons written as one face (polygon output)
-  size_t triangulated = 0;    ///< polygons written as triangles by the dynamic programme
-  size_t fans = 0;            ///< clusters fanned from an interior vertex instead
-  size_t cluster_splits = 0;  ///< clusters split because nothing else gave a valid mesh
-};
-
-struct SimplifiedMesh {
-  Mesh mesh;                            ///< the output (positions are input positions)
-  std::vector<uint32_t> face_cluster;   ///< per output face: its cluster
-  std::vector<uint32_t> vertex_source;  ///< per output vertex: the input vertex it copies
-  MeshingStats stats;
-};
 
 /// Meshes a complete partition (every face assigned, clusters edge-connected). May split
 /// clusters of `p` when a cluster cannot be meshed otherwise (counted in stats). Throws

@@ -13,29 +13,9 @@
 #include <span>
 #include <vector>
 
-#include "limn/simplify/partition.hpp"
+#include "limn/simplify/vsa.hpp"
 
 namespace limn {
-
-enum class SeedingMethod {
-  curvature,  ///< Jin et al.'s adaptive, curvature-driven growth
-  random,     ///< K random seed faces, regions flooded by normal deviation (for comparison)
-};
-
-struct SeedingOptions {
-  SeedingMethod method = SeedingMethod::curvature;
-  size_t clusters = 100;  ///< K, at least 1
-  uint64_t seed = 1;      ///< random-number seed for the choice of seed faces
-  /// |n(T) - n_C| below which a face still joins a cluster whose curvature budget is spent
-  /// (0.035 is about 2 degrees).
-  double planar_deviation = 0.035;
-};
-
-struct SeedingStats {
-  size_t clusters = 0;   ///< clusters the seeding made (curvature seeding may make fewer)
-  double budget = 0;     ///< D, in radians (integrated |K| per cluster)
-  size_t left_over = 0;  ///< faces no cluster took during growth
-};
 
 /// Seeds a partition; faces may be left unassigned (see absorb_unassigned). O(F log F).
 Partition seed_partition(const VsaSurface& s, const SeedingOptions& options,

@@ -10,6 +10,7 @@
 #include <set>
 #include <sstream>
 
+#include "cli_runner.hpp"
 #include "limn/io/mesh_io.hpp"
 #include "limn/simplify/validate.hpp"
 #include "simplify_oracle.hpp"
@@ -18,65 +19,19 @@ namespace limn {
 namespace {
 
 namespace fs = std::filesystem;
+using test::slurp;
 using ::testing::HasSubstr;
 
 const fs::path kModels = LIMN_SHARED_MODELS;
 const fs::path kData = LIMN_TEST_DATA;
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-class SimplifyCli : public ::testing::Test {
- protected:
-  struct Result {
-    int code = -1;
-    std::string out, err;
-  };
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("limn-simplify-" + std::to_string(::getpid()) + "-" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  Result limn(const std::string& args) {
-    const fs::path out = dir_.parent_path() / (dir_.filename().string() + ".out"),
-                   err = dir_.parent_path() / (dir_.filename().string() + ".err");
-    const std::string cmd = std::string("'") + LIMN_CLI + "' " + args + " >'" + out.string() +
-                            "' 2>'" + err.string() + "' </dev/null";
-    const int status = std::system(cmd.c_str());
-    Result r;
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    r.out = slurp(out), r.err = slurp(err);
-    fs::remove(out), fs::remove(err);
-    return r;
-  }
-  std::vector<std::string> files() const {
-    std::vector<std::string> v;
-    for (const auto& e : fs::directory_iterator(dir_)) v.push_back(e.path().filename().string());
-    std::sort(v.begin(), v.end());
-    return v;
-  }
-  static std::string q(const fs::path& p) {
-    // Appending (not operator+ on a literal) dodges a false -Wrestrict in GCC 12's std::string.
-    std::string s(1, '\'');
-    s.append(p.string());
-    s.push_back('\'');
-    return s;
-  }
-  fs::path dir_;
-};
+class SimplifyCli : public test::CliTest {};
 
 TEST_F(SimplifyCli, WritesAValidMeshTheLabelsAndAReport) {
   const fs::path in = kModels / "tri" / "spot.obj", out = dir_ / "spot.obj",
                  labels = dir_ / "labels.txt";
-  const Result r = limn("simplify " + q(in) + " -o " + q(out) + " --proxies 30 --labels " +
-                        q(labels) + " --json --samples 20000");
+  const test::CliResult r = limn("simplify " + q(in) + " -o " + q(out) + " --proxies 30 --labels " +
+                                 q(labels) + " --json --samples 20000");
   ASSERT_EQ(r.code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
   const Mesh input = read_mesh(in), output = read_mesh(out);
@@ -110,8 +65,8 @@ TEST_F(SimplifyCli, WritesAValidMeshTheLabelsAndAReport) {
 
 TEST_F(SimplifyCli, PolygonsLloydRandomSeedingAndATargetError) {
   const fs::path in = kModels / "tri" / "fandisk.obj";
-  Result r = limn("simplify " + q(in) + " -o " + q(dir_ / "p.ply") +
-                  " --proxies 20 --polygons --json --samples 1000");
+  test::CliResult r = limn("simplify " + q(in) + " -o " + q(dir_ / "p.ply") +
+                           " --proxies 20 --polygons --json --samples 1000");
   ASSERT_EQ(r.code, 0) << r.err;
   const Mesh poly = read_mesh(dir_ / "p.ply");
   size_t big = 0;
@@ -142,7 +97,7 @@ TEST_F(SimplifyCli, BadInputExitsTwoAndWritesNothing) {
   for (const fs::path& bad : {kData / "nonmanifold.obj", kData / "bad" / "bad_nan.obj",
                               kData / "bad" / "bad_index_past_end.off"}) {
     SCOPED_TRACE(bad.string());
-    const Result r = limn("simplify " + q(bad) + " -o " + q(out) + " --proxies 5");
+    const test::CliResult r = limn("simplify " + q(bad) + " -o " + q(out) + " --proxies 5");
     EXPECT_EQ(r.code, 2);
     EXPECT_THAT(r.err, HasSubstr(bad.filename().string()));
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
@@ -169,14 +124,14 @@ TEST_F(SimplifyCli, BadUsageExitsTwo) {
         "simplify " + in + " -o " + q(dir_ / "no" / "such" / "o.obj"),
         "simplify " + in + " -o " + out + " --labels " + q(dir_ / "no" / "labels.txt")}) {
     SCOPED_TRACE(args);
-    const Result r = limn(args);
+    const test::CliResult r = limn(args);
     EXPECT_EQ(r.code, 2) << r.err;
     EXPECT_EQ(files(), std::vector<std::string>{});
   }
 }
 
 TEST_F(SimplifyCli, HelpNamesEveryOption) {
-  const Result r = limn("simplify --help");
+  const test::CliResult r = limn("simplify --help");
   ASSERT_EQ(r.code, 0);
   for (const char* opt : {"--proxies", "--method", "--seeding", "--labels", "--polygons", "--json",
                           "--target-error", "--split-threshold", "--teleports", "--no-fill"})

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "cli_runner.hpp"
 #include "limn/io/mesh_io.hpp"
 #include "limn/paint/file.hpp"
 #include "limn/paint/lookup.hpp"
@@ -20,6 +21,7 @@ namespace limn {
 namespace {
 
 namespace fs = std::filesystem;
+using test::slurp;
 using ::testing::HasSubstr;
 
 const fs::path kData = LIMN_TEST_DATA;
@@ -27,61 +29,7 @@ const std::string kModels = LIMN_SHARED_MODELS;
 const std::string kBunny = kModels + "/tri/stanford-bunny.obj";
 const std::string kSpot = kModels + "/tri/spot.obj";
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-struct Result {
-  int code = -1;
-  std::string out, err;
-};
-
-class PaintCli : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("limn-paint-cli-" + std::to_string(::getpid()) + "-" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  Result limn(const std::string& args) {
-    const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
-    const std::string cmd = std::string("'") + LIMN_CLI + "' " + args + " >'" + out.string() +
-                            "' 2>'" + err.string() + "' </dev/null";
-    const int status = std::system(cmd.c_str());
-    Result r;
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    r.out = slurp(out), r.err = slurp(err);
-    fs::remove(out), fs::remove(err);
-    return r;
-  }
-  fs::path write(const std::string& name, const std::string& text) {
-    const fs::path p = dir_ / name;
-    std::ofstream(p, std::ios::binary) << text;
-    return p;
-  }
-  std::vector<std::string> files() const {
-    std::vector<std::string> v;
-    for (const auto& e : fs::directory_iterator(dir_)) v.push_back(e.path().filename().string());
-    std::sort(v.begin(), v.end());
-    return v;
-  }
-  // (Appends rather than operator+: GCC 12's -Wrestrict misfires on the latter at -O3.)
-  static std::string q(const fs::path& p) {
-    std::string s = "'";
-    s += p.string();
-    s += '\'';
-    return s;
-  }
-
-  fs::path dir_;
-};
+class PaintCli : public test::CliTest {};
 
 // The world-space form scripts depend on, exactly as the issue gives it: a stroke along the
 // bunny's flank (points are vertices of the model), radius in model units.
@@ -107,7 +55,8 @@ double distance_to_polyline(const float* p, const std::vector<std::array<double,
 
 TEST_F(PaintCli, AScriptedStrokeOnTheBunnyBakesToAColouredMesh) {
   const fs::path strokes = write("stroke.json", kBunnyStroke), tex = dir_ / "bunny.lot";
-  Result r = limn("paint " + q(kBunny) + " --strokes " + q(strokes) + " -o " + q(tex) + " --json");
+  test::CliResult r =
+      limn("paint " + q(kBunny) + " --strokes " + q(strokes) + " -o " + q(tex) + " --json");
   ASSERT_EQ(r.code, 0) << r.err;
   const nlohmann::json j = nlohmann::json::parse(r.out);
   EXPECT_GT(j["dabs"].get<int>(), 20);
@@ -180,8 +129,8 @@ TEST_F(PaintCli, ScreenStrokesUndoPickAndAPngBake) {
       {"type": "fill", "color": [1, 1, 1, 1], "opacity": 0.0}
     ]})";
   const fs::path strokes = write("screen.json", script), tex = dir_ / "spot.lot";
-  Result r = limn("paint " + q(kSpot) + " --strokes " + q(strokes) + " -o " + q(tex) +
-                  " --background 1,1,1,1 --json");
+  test::CliResult r = limn("paint " + q(kSpot) + " --strokes " + q(strokes) + " -o " + q(tex) +
+                           " --background 1,1,1,1 --json");
   ASSERT_EQ(r.code, 0) << r.err;
   const nlohmann::json j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j["undos"].get<int>(), 1);
@@ -208,8 +157,8 @@ TEST_F(PaintCli, ThreadsCapLeavesTheTextureAsItIs) {
   const char* caps[3] = {"--threads 1 ", "--threads 4 ", ""};
   for (int i = 0; i < 3; ++i) {
     const fs::path tex = dir_ / ("t" + std::to_string(i) + ".lot");
-    const Result r = limn(std::string(caps[i]) + "paint " + q(mesh) + " --strokes " + q(strokes) +
-                          " -o " + q(tex) + " --depth 9 --json");
+    const test::CliResult r = limn(std::string(caps[i]) + "paint " + q(mesh) + " --strokes " +
+                                   q(strokes) + " -o " + q(tex) + " --depth 9 --json");
     ASSERT_EQ(r.code, 0) << r.err;
     const nlohmann::json j = nlohmann::json::parse(r.out);
     EXPECT_GT(j["samples_changed"].get<int>(), 10000);
@@ -222,8 +171,8 @@ TEST_F(PaintCli, ThreadsCapLeavesTheTextureAsItIs) {
   }
   EXPECT_EQ(bytes[0], bytes[1]);
   EXPECT_EQ(bytes[0], bytes[2]);
-  const Result bad = limn("--threads 0 paint " + q(mesh) + " --strokes " + q(strokes) + " -o " +
-                          q(dir_ / "bad.lot"));
+  const test::CliResult bad = limn("--threads 0 paint " + q(mesh) + " --strokes " + q(strokes) +
+                                   " -o " + q(dir_ / "bad.lot"));
   EXPECT_EQ(bad.code, 2);
   EXPECT_THAT(bad.err, HasSubstr("--threads"));
   EXPECT_FALSE(fs::exists(dir_ / "bad.lot"));
@@ -263,7 +212,7 @@ TEST_F(PaintCli, BadStrokeScriptsExitTwoAndLeaveThePreviousOutput) {
   for (const auto& [what, text] : bad) {
     SCOPED_TRACE(what);
     const fs::path s = write("bad.json", text);
-    Result r = limn("paint " + q(kSpot) + " --strokes " + q(s) + " -o " + q(out));
+    test::CliResult r = limn("paint " + q(kSpot) + " --strokes " + q(s) + " -o " + q(out));
     EXPECT_EQ(r.code, 2) << r.err;
     EXPECT_THAT(r.err, HasSubstr("bad.json"));
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
@@ -285,7 +234,7 @@ TEST_F(PaintCli, BadTexturesMeshesAndUsageExitTwo) {
     if (e.path().extension() != ".lot") continue;
     SCOPED_TRACE(e.path().string());
     const fs::path out = dir_ / "out.ply";
-    Result r = limn("bake " + q(e.path()) + " " + q(kSpot) + " -o " + q(out));
+    test::CliResult r = limn("bake " + q(e.path()) + " " + q(kSpot) + " -o " + q(out));
     EXPECT_EQ(r.code, 2);
     EXPECT_THAT(r.err, HasSubstr(e.path().filename().string()));
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
@@ -301,7 +250,7 @@ TEST_F(PaintCli, BadTexturesMeshesAndUsageExitTwo) {
   EXPECT_GE(n, 10u);
   const Mesh cube_mesh = read_mesh(kData / "nonmanifold.obj");
   // A PNG needs uvs; the bunny has none.
-  Result r = limn("bake " + q(good) + " " + q(kBunny) + " -o " + q(dir_ / "b.png"));
+  test::CliResult r = limn("bake " + q(good) + " " + q(kBunny) + " -o " + q(dir_ / "b.png"));
   EXPECT_EQ(r.code, 2);
   EXPECT_THAT(r.err, HasSubstr("texture coordinates"));
   EXPECT_FALSE(fs::exists(dir_ / "b.png"));
