@@ -213,7 +213,7 @@ bool box_callback(RTCPointQueryFunctionArguments* args) {
   using paint_detail::v3;
   const paint_detail::V3 a = v3(q.s->corner(t, 0)), b = v3(q.s->corner(t, 1)),
                          d = v3(q.s->corner(t, 2));
-  // Refiner::filter's test, so the same triangles as filtering triangles_near's answer.
+  // CellBoxes::filter's test, so the same triangles as filtering triangles_near's answer.
   if (paint_detail::tri_meets_box(q.c, q.h, a, b, d, q.slack)) q.out->push_back(t);
   return false;
 }

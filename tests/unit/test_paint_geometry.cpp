@@ -14,6 +14,7 @@
 #include "limn/mesh/shapes.hpp"
 #include "limn/paint/surface.hpp"
 #include "limn/paint/texture.hpp"
+#include "paint/cell_boxes.hpp"
 #include "paint/geometry.hpp"
 #include "paint/octree_blocks.hpp"
 #include "paint/refine.hpp"
@@ -148,7 +149,7 @@ TEST(PaintGeometry, LeafMasksEqualTestingEachLeaf) {
                    test::sheet(-1.2, -0.2, -0.6, 0.6, 0.002, 25, false)});
   const PaintSurface s(m);
   OctreeTexture tex = OctreeTexture::create(s);
-  const detail::Refiner r(tex, s);
+  const detail::CellBoxes r(tex, s);
   std::mt19937 rng(5);
   size_t bits = 0, tested = 0;
   std::vector<uint64_t> masks;
@@ -164,14 +165,14 @@ TEST(PaintGeometry, LeafMasksEqualTestingEachLeaf) {
     const uint64_t want = iter % 2 ? ~uint64_t(0) : (uint64_t(rng()) << 32 | rng());
     r.leaf_masks(list, bb, want, masks);
     ASSERT_EQ(masks.size(), list.size());
-    const detail::Refiner::BrickLeaves l = r.brick_leaves(bb);
+    const detail::CellBoxes::BrickLeaves l = r.brick_leaves(bb);
     for (size_t i = 0; i < list.size(); ++i) {
       paint_detail::TriAxes ta;
       paint_detail::tri_axes(bb.c, l.h, r.slack(), paint_detail::v3(s.corner(list[i], 0)),
                              paint_detail::v3(s.corner(list[i], 1)),
                              paint_detail::v3(s.corner(list[i], 2)), ta);
       for (int leaf = 0; leaf < 64; ++leaf) {
-        const detail::CellBox lb = detail::Refiner::leaf_box(l, leaf);
+        const detail::CellBox lb = detail::CellBoxes::leaf_box(l, leaf);
         ASSERT_EQ(lb.c.x, r.child(r.child(bb, leaf >> 3), leaf & 7).c.x);
         ASSERT_EQ(lb.c.y, r.child(r.child(bb, leaf >> 3), leaf & 7).c.y);
         ASSERT_EQ(lb.c.z, r.child(r.child(bb, leaf >> 3), leaf & 7).c.z);
@@ -201,7 +202,7 @@ TEST(PaintGeometry, SplitKeepsEveryTriangleMeetingAChildAndNothingFar) {
   const PaintSurface s(m);
   const std::vector<test::Tri> tris = test::triangles(m);
   OctreeTexture tex = OctreeTexture::create(s);
-  const detail::Refiner r(tex, s);
+  const detail::CellBoxes r(tex, s);
   std::mt19937 rng(13);
   size_t kept = 0, untested = 0;
   for (int iter = 0; iter < 1000; ++iter) {
@@ -217,7 +218,7 @@ TEST(PaintGeometry, SplitKeepsEveryTriangleMeetingAChildAndNothingFar) {
     detail::CellBox kids[8];
     r.children(cb, kids);
     const uint32_t want = iter % 3 ? 0xffu : uint32_t(rng() % 256);
-    detail::Refiner::Split out;
+    detail::Split out;
     r.split(list, cb, kids, out, want);
     for (int k = 0; k < 8; ++k) {
       std::vector<uint32_t> exact;
@@ -260,10 +261,10 @@ TEST(PaintGeometry, StartListsEqualTheBoxQueries) {
       for (uint32_t z = 0; z < n; ++z)
         for (uint32_t y = 0; y < n; ++y)
           for (uint32_t x = 0; x < n; ++x) {
-            const detail::CellBox cb = r.box(octree::kStartDepth, x, y, z);
+            const detail::CellBox cb = r.boxes().box(octree::kStartDepth, x, y, z);
             const float c[3] = {cb.c.x, cb.c.y, cb.c.z};
             std::vector<uint32_t> want;
-            s.triangles_in_box(c, cb.h, r.slack(), want);
+            s.triangles_in_box(c, cb.h, r.boxes().slack(), want);
             const std::span<const uint32_t> got = r.start_list(x, y, z);
             ASSERT_EQ(std::vector<uint32_t>(got.begin(), got.end()), want)
                 << "cell " << x << " " << y << " " << z << " margin " << (t == &a ? 0.05 : 0.3);
@@ -360,7 +361,7 @@ TEST(PaintGeometry, LeafFromCandidatesEqualsTheLeafOfTheList) {
                    test::sheet(-1.2, -0.2, -0.6, 0.6, 0.002, 25, false)});
   const PaintSurface s(m);
   OctreeTexture t = OctreeTexture::create(s, pack_rgba8(10, 20, 30, 40));
-  const detail::Refiner r(t, s);
+  const detail::CellBoxes r(t, s);
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> u(0, 1);
   size_t leaves = 0, two_sided = 0, empty = 0;
@@ -424,7 +425,7 @@ TEST(PaintGeometry, WholeListShortcutGivesTheSplitsLists) {
       {test::uv_sphere(1.0, 30, 60), test::sheet(-1.2, -0.2, -0.6, 0.6, 0.0, 25, true)});
   const PaintSurface s(m);
   OctreeTexture t = OctreeTexture::create(s);
-  const detail::Refiner r(t, s);
+  const detail::CellBoxes r(t, s);
   std::mt19937 rng(9);
   std::uniform_real_distribution<float> u(0, 1);
   size_t fired = 0, nowhere = 0, declined = 0;
@@ -451,7 +452,7 @@ TEST(PaintGeometry, WholeListShortcutGivesTheSplitsLists) {
       ++declined;
       continue;
     }
-    detail::Refiner::Split out;
+    detail::Split out;
     r.split(list, cb, kids, out, want);
     for (int c = 0; c < 8; ++c)
       ASSERT_EQ(out[size_t(c)], c == only ? list : std::vector<uint32_t>{})
