@@ -98,28 +98,13 @@ std::vector<float> ring_stroke(const Mesh& m, float height, float band, bool out
   return xyz;
 }
 
-// The workflow on the procedural torus (extraordinary vertices of valence 3, 5, 6 and 8).
-void workflow(const std::filesystem::path& dir, std::string& md, nlohmann::json& report) {
-  Stopwatch sw;
-  const Mesh cage = make_shape("torus");
-  md += fmt::format(
-      "\n## The workflow on the `torus` cage ({} quads)\n\n"
-      "Adaptive limit surface (per-vertex depth from the camera, 0.5 px tolerance), drawn on the "
-      "GPU with tessellation shaders; colours show each patch's refinement level (blue shallow, "
-      "red deep), lines the patch outlines. The near camera looks at the valence-{} vertex.\n\n",
-      cage.face_count(), 8);
-  nlohmann::json j;
-  std::unique_ptr<GlContext> gl;
-  try {
-    gl = std::make_unique<GlContext>();
-  } catch (const std::exception& e) {
-    fmt::print(stderr, "demo: no OpenGL, images skipped ({})\n", e.what());
-    md += fmt::format("No OpenGL context ({}): images skipped.\n\n", e.what());
-  }
-  // 1. Adaptive surface: the hierarchy once, then a view change only selects.
-  PatchOptions po;
-  po.subdiv = subdiv_options(cage);
-  po.depth = 8;
+constexpr float kWhite[4] = {1, 1, 1, 1};
+
+// The workflow's first step: the adaptive surface seen from two cameras (a hierarchy once, then a
+// view change only selects).
+void workflow_surface(const std::filesystem::path& dir, std::string& md, nlohmann::json& j,
+                      Stopwatch& sw, GlContext* gl, std::unique_ptr<RenderTarget>& target,
+                      const Mesh& cage, const PatchOptions& po) {
   fmt::print(stderr, "adaptive surface: patch hierarchy to depth {} ...", po.depth);
   std::fflush(stderr);
   const PatchHierarchy h = build_patch_hierarchy(cage, po);
@@ -128,9 +113,7 @@ void workflow(const std::filesystem::path& dir, std::string& md, nlohmann::json&
   const std::vector<float> points = h.table.points(cage.positions);
   const double t_hierarchy = sw.lap();
   fmt::print(stderr, " {} nodes ({:.0f} ms)\n", h.node_count(), t_hierarchy);
-  std::unique_ptr<RenderTarget> target;
   if (gl) target = std::make_unique<RenderTarget>(kWidth, kHeight, 4);
-  const float white[4] = {1, 1, 1, 1};
   md +=
       "| camera | patches | deepest level | select ms | GPU ms | image "
       "|\n|---|---:|---:|---:|---:|---|\n";
@@ -162,7 +145,7 @@ void workflow(const std::filesystem::path& dir, std::string& md, nlohmann::json&
     double gpu_ms = 0;
     if (gl) {
       PatchDrawer drawer(cage, sel, points);
-      target->begin(white);
+      target->begin(kWhite);
       DrawOptions o;
       o.depth_colors = o.outline = true;
       gpu_ms = drawer.draw(cam, o).gpu_ms;
@@ -179,8 +162,13 @@ void workflow(const std::filesystem::path& dir, std::string& md, nlohmann::json&
                           {"image", file}};
   }
   sw.lap();
+}
 
-  // 2. Paint: a dense tessellation of the surface, scripted strokes into an octree texture.
+// The second: a dense tessellation of the surface painted by scripted strokes into an octree
+// texture, baked and drawn. Returns the tessellation.
+Mesh workflow_paint(const std::filesystem::path& dir, std::string& md, nlohmann::json& j,
+                    Stopwatch& sw, GlContext* gl, RenderTarget* target, const Mesh& cage,
+                    const PatchOptions& po) {
   PatchOptions fixed = po;
   fixed.depth = 2;
   const PatchTable table = build_patches(cage, fixed);
@@ -242,7 +230,7 @@ void workflow(const std::filesystem::path& dir, std::string& md, nlohmann::json&
     GpuOctreeTexture gpu_texture(texture);
     DrawOptions o;
     o.texture = &gpu_texture;
-    target->begin(white);
+    target->begin(kWhite);
     drawer.draw(overview(cage, 1.0f), o);
     save_image(*target, dir / "painted.png");
     md += "![painted](painted.png)\n\n";
@@ -253,8 +241,13 @@ void workflow(const std::filesystem::path& dir, std::string& md, nlohmann::json&
                 {"max_depth", ts.max_depth},
                 {"ms", t_paint}};
   sw.lap();
+  return dense;
+}
 
-  // 3. Simplify the painted surface back to a few polygons.
+// The third: the painted surface simplified back to a few polygons.
+void workflow_simplify(const std::filesystem::path& dir, std::string& md, nlohmann::json& j,
+                       Stopwatch& sw, GlContext* gl, RenderTarget* target, const Mesh& cage,
+                       const Mesh& dense) {
   VsaOptions vo;
   vo.proxies = 40;
   vo.meshing.polygons = true;
@@ -272,11 +265,11 @@ void workflow(const std::filesystem::path& dir, std::string& md, nlohmann::json&
   if (gl) {
     const Camera cam = overview(cage, 1.0f);
     MeshDrawer partition(dense, cluster_colors(r.labels));
-    target->begin(white);
+    target->begin(kWhite);
     partition.draw(cam, DrawOptions{});
     save_image(*target, dir / "partition.png");
     MeshDrawer simplified(r.output.mesh, cluster_colors(r.output.face_cluster), true);
-    target->begin(white);
+    target->begin(kWhite);
     DrawOptions o;
     o.outline = true;
     simplified.draw(cam, o);
@@ -290,6 +283,33 @@ void workflow(const std::filesystem::path& dir, std::string& md, nlohmann::json&
                    {"energy", r.stats.energy},
                    {"polygons", r.output.mesh.face_count()},
                    {"ms", t_simplify}};
+}
+
+// The workflow on the procedural torus (extraordinary vertices of valence 3, 5, 6 and 8).
+void workflow(const std::filesystem::path& dir, std::string& md, nlohmann::json& report) {
+  Stopwatch sw;
+  const Mesh cage = make_shape("torus");
+  md += fmt::format(
+      "\n## The workflow on the `torus` cage ({} quads)\n\n"
+      "Adaptive limit surface (per-vertex depth from the camera, 0.5 px tolerance), drawn on the "
+      "GPU with tessellation shaders; colours show each patch's refinement level (blue shallow, "
+      "red deep), lines the patch outlines. The near camera looks at the valence-{} vertex.\n\n",
+      cage.face_count(), 8);
+  nlohmann::json j;
+  std::unique_ptr<GlContext> gl;
+  try {
+    gl = std::make_unique<GlContext>();
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "demo: no OpenGL, images skipped ({})\n", e.what());
+    md += fmt::format("No OpenGL context ({}): images skipped.\n\n", e.what());
+  }
+  std::unique_ptr<RenderTarget> target;  // made by the first step, once timed
+  PatchOptions po;
+  po.subdiv = subdiv_options(cage);
+  po.depth = 8;
+  workflow_surface(dir, md, j, sw, gl.get(), target, cage, po);
+  const Mesh dense = workflow_paint(dir, md, j, sw, gl.get(), target.get(), cage, po);
+  workflow_simplify(dir, md, j, sw, gl.get(), target.get(), cage, dense);
   if (gl) j["renderer"] = gl->renderer();
   report["workflow"] = j;
 }
