@@ -10,6 +10,7 @@
 #include <new>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "limn/paint/texture.hpp"
 #include "octree_blocks.hpp"
@@ -29,27 +30,78 @@ constexpr std::array<float, 256> kByteToUnit = [] {
 
 }  // namespace
 
-namespace detail {
+namespace {
 
-void* pool_allocate(std::size_t bytes) {
-  if (bytes < kHugeBytes) return ::operator new(bytes);
-  const std::size_t size = (bytes + kHugeBytes - 1) / kHugeBytes * kHugeBytes;
-  void* p = std::aligned_alloc(kHugeBytes, size);
+// Past kHugeBytes, 2 MiB-aligned storage advised as huge pages; smaller blocks from operator new.
+// Throws std::bad_alloc.
+uint32_t* pool_allocate(std::size_t words) {
+  const std::size_t bytes = words * sizeof(uint32_t);
+  if (bytes < octree::kHugeBytes) return static_cast<uint32_t*>(::operator new(bytes));
+  const std::size_t size =
+      (bytes + octree::kHugeBytes - 1) / octree::kHugeBytes * octree::kHugeBytes;
+  void* p = std::aligned_alloc(octree::kHugeBytes, size);
   if (!p) throw std::bad_alloc();
 #ifdef MADV_HUGEPAGE
   madvise(p, size, MADV_HUGEPAGE);  // advice only: where refused, 4 KiB pages as before
 #endif
-  return p;
+  return static_cast<uint32_t*>(p);
 }
 
-void pool_deallocate(void* p, std::size_t bytes) noexcept {
-  if (bytes < kHugeBytes)
+void pool_deallocate(uint32_t* p, std::size_t words) noexcept {
+  if (!p) return;
+  if (words * sizeof(uint32_t) < octree::kHugeBytes)
     ::operator delete(p);
   else
     std::free(p);
 }
 
-}  // namespace detail
+}  // namespace
+
+OctreeTexture::Words::Words() : data_(pool_allocate(2)), size_(2), capacity_(2) {
+  data_[0] = data_[1] = 0;
+}
+
+OctreeTexture::Words::Words(const Words& o)
+    : data_(o.size_ ? pool_allocate(o.size_) : nullptr), size_(o.size_), capacity_(o.size_) {
+  std::copy_n(o.data_, o.size_, data_);
+}
+
+OctreeTexture::Words::Words(Words&& o) noexcept
+    : data_(std::exchange(o.data_, nullptr)),
+      size_(std::exchange(o.size_, 0)),
+      capacity_(std::exchange(o.capacity_, 0)) {}
+
+OctreeTexture::Words& OctreeTexture::Words::operator=(const Words& o) {
+  if (this != &o) *this = Words(o);
+  return *this;
+}
+
+OctreeTexture::Words& OctreeTexture::Words::operator=(Words&& o) noexcept {
+  if (this != &o) {
+    pool_deallocate(data_, capacity_);
+    data_ = std::exchange(o.data_, nullptr);
+    size_ = std::exchange(o.size_, 0);
+    capacity_ = std::exchange(o.capacity_, 0);
+  }
+  return *this;
+}
+
+OctreeTexture::Words::~Words() {
+  pool_deallocate(data_, capacity_);
+}
+
+void OctreeTexture::Words::resize(size_t n, uint32_t v) {
+  if (n > capacity_) {
+    // Doubling, as std::vector grows.
+    const size_t cap = std::max(2 * size_, n);
+    uint32_t* p = pool_allocate(cap);
+    std::copy_n(data_, size_, p);
+    pool_deallocate(data_, capacity_);
+    data_ = p, capacity_ = cap;
+  }
+  if (n > size_) std::fill(data_ + size_, data_ + n, v);
+  size_ = n;
+}
 
 Rgba8 rgba8_from_float(const float rgba[4]) {
   return rgba8_from_floats(rgba[0], rgba[1], rgba[2], rgba[3]);
@@ -353,7 +405,8 @@ bool OctreeTexture::operator==(const OctreeTexture& o) const {
     return std::vector<std::vector<uint32_t>>(f.begin(), f.begin() + std::ptrdiff_t(n));
   };
   return std::equal(origin_, origin_ + 3, o.origin_) && size_ == o.size_ &&
-         background_ == o.background_ && pool_ == o.pool_ && trimmed(free_) == trimmed(o.free_);
+         background_ == o.background_ && std::ranges::equal(words(), o.words()) &&
+         trimmed(free_) == trimmed(o.free_);
 }
 
 namespace {
@@ -466,7 +519,7 @@ OctreeTextureStats OctreeTexture::stats() const {
 
 void OctreeTexture::compact() {
   if (recording_) throw std::logic_error("OctreeTexture::compact while a stroke is recorded");
-  Pool out = {0, 0};
+  Words out;
   std::vector<std::vector<uint32_t>> gaps;
   std::vector<uint32_t> words;
   // Reserves a block; general blocks start at even words (a one-word gap becomes a free block).
@@ -474,7 +527,7 @@ void OctreeTexture::compact() {
     if (!brick && out.size() % 2) {
       if (gaps.size() <= block_class(1, true)) gaps.resize(block_class(1, true) + 1);
       gaps[block_class(1, true)].push_back(uint32_t(out.size()));
-      out.push_back(0);
+      out.resize(out.size() + 1, 0);
     }
     const size_t at = out.size();
     out.resize(at + n, 0);
@@ -484,7 +537,7 @@ void OctreeTexture::compact() {
     const Brick b = decode_brick(pool_, word);
     const uint32_t n = brick_block_words(b.mask, b.dbl), from = word & ~octree::kBrickDoubleFlag;
     const uint32_t at = reserve(n, true);
-    std::copy_n(pool_.begin() + from, n, out.begin() + at);
+    std::copy_n(pool_.data() + from, n, out.data() + at);
     return at | (word & octree::kBrickDoubleFlag);
   };
   // Returns the node's new address.
@@ -496,7 +549,7 @@ void OctreeTexture::compact() {
     for (int c = 0; c < 8; ++c)
       if (n.kind[c] == CellKind::brick) n.ptr[c] = copy_brick(n.ptr[c]);
     encode_general(n, words);
-    std::copy(words.begin(), words.end(), out.begin() + at);
+    std::copy(words.begin(), words.end(), out.data() + at);
     return at;
   };
   if (octree::occupied(pool_[1])) {

@@ -39,6 +39,8 @@ inline constexpr uint32_t make_info(uint32_t occ, uint32_t leaf, uint32_t brick,
 }
 inline constexpr uint32_t kBrickDoubleFlag = 0x80000000u;
 inline constexpr uint32_t kMaxPoolWords = 0x7ffffffeu;  ///< brick words keep 31 bits of address
+/// Pools of at least this many bytes are 2 MiB-aligned and advised as huge pages.
+inline constexpr std::size_t kHugeBytes = std::size_t(2) << 20;
 
 }  // namespace limn::octree
 
@@ -185,7 +187,7 @@ class OctreeEditor {
  public:
   explicit OctreeEditor(OctreeTexture& t) : t_(t) {}
 
-  std::span<const uint32_t> pool() const { return t_.pool_; }
+  std::span<const uint32_t> pool() const { return t_.words(); }
   uint32_t word(size_t i) const { return t_.pool_[i]; }
   Rgba8 background() const { return t_.background_; }
   const OctreeTexture& texture() const { return t_; }
@@ -209,7 +211,8 @@ class OctreeEditor {
   static void redo_ops(OctreeTexture& t, std::span<const OctreeTexture::JournalOp> ops);
   static bool& recording(OctreeTexture& t) { return t.recording_; }
   static std::vector<OctreeTexture::JournalOp>& journal(OctreeTexture& t) { return t.journal_; }
-  static OctreeTexture::Pool& pool(OctreeTexture& t) { return t.pool_; }
+  /// The pool's storage, for a reader that fills it whole (octree_file.cpp).
+  static OctreeTexture::Words& pool(OctreeTexture& t) { return t.pool_; }
   static std::vector<std::vector<uint32_t>>& free_lists(OctreeTexture& t) { return t.free_; }
   static const std::vector<std::vector<uint32_t>>& free_lists(const OctreeTexture& t) {
     return t.free_;

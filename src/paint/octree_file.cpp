@@ -129,7 +129,7 @@ OctreeTexture parse_lot(std::string_view bytes, std::string_view name, bool veri
   if (words < 2 || words > octree::kMaxPoolWords + 2)
     fail("corrupt: " + std::to_string(words) + " pool words");
   OctreeTexture t = OctreeTexture::empty(origin, size, get32(bytes, 36));
-  OctreeTexture::Pool& pool = OctreeEditor::pool(t);
+  auto& pool = OctreeEditor::pool(t);
   pool.resize(size_t(words));
   for (size_t i = 0; i < pool.size(); ++i) pool[i] = get32(bytes, kHeader + 4 * i);
   auto& lists = OctreeEditor::free_lists(t);

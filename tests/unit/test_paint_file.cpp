@@ -13,6 +13,7 @@
 #include "limn/paint/file.hpp"
 #include "limn/paint/lookup.hpp"
 #include "limn/paint/undo.hpp"
+#include "paint/octree_blocks.hpp"
 #include "paint_oracle.hpp"
 
 namespace limn {
@@ -157,16 +158,16 @@ TEST(PaintFile, SaveLoadRoundTripsExactly) {
 }
 
 // A pool past 2 MiB lives in 2 MiB-aligned storage (huge pages where the system has them, see
-// detail::PoolAllocator): a copy, a save/load round trip, a stroke's undo and compaction keep
+// OctreeTexture::Words): a copy, a save/load round trip, a stroke's undo and compaction keep
 // every word.
 TEST(PaintFile, PoolsPastTwoMiBKeepEveryWord) {
   const Mesh m = test::uv_sphere(1.0, 30, 60);
   const PaintSurface s(m);
   OctreeTexture t = OctreeTexture::create(s);
   refine_surface(t, s, 9);
-  ASSERT_GT(t.words().size() * sizeof(uint32_t), detail::kHugeBytes);
+  ASSERT_GT(t.words().size() * sizeof(uint32_t), octree::kHugeBytes);
   auto aligned = [](const OctreeTexture& x) {
-    return reinterpret_cast<uintptr_t>(x.words().data()) % detail::kHugeBytes == 0;
+    return reinterpret_cast<uintptr_t>(x.words().data()) % octree::kHugeBytes == 0;
   };
   EXPECT_TRUE(aligned(t));
   const OctreeTexture copy = t;

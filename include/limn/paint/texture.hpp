@@ -145,27 +145,6 @@ struct OctreeSample {
 class PaintSurface;
 namespace detail {
 class OctreeEditor;
-
-/// Storage for allocations of at least kHugeBytes: 2 MiB-aligned and, where the system has
-/// them, advised as transparent huge pages (Linux madvise); smaller ones from operator new.
-/// Throws std::bad_alloc.
-inline constexpr std::size_t kHugeBytes = std::size_t(2) << 20;
-void* pool_allocate(std::size_t bytes);
-void pool_deallocate(void* p, std::size_t bytes) noexcept;
-
-/// The pool's allocator (pool_allocate): a texture's pool is one flat array that lookups read
-/// at random and painting grows, so past 2 MiB one TLB entry and one page fault cover 2 MiB
-/// instead of 4 KiB.
-template <class T>
-struct PoolAllocator {
-  using value_type = T;
-  PoolAllocator() noexcept = default;
-  template <class U>
-  PoolAllocator(const PoolAllocator<U>&) noexcept {}
-  T* allocate(std::size_t n) { return static_cast<T*>(pool_allocate(n * sizeof(T))); }
-  void deallocate(T* p, std::size_t n) noexcept { pool_deallocate(p, n * sizeof(T)); }
-  friend bool operator==(const PoolAllocator&, const PoolAllocator&) noexcept { return true; }
-};
 }  // namespace detail
 
 /// The texture: the pool, the cube it covers, and the free lists. Copyable (a snapshot).
@@ -230,9 +209,6 @@ class OctreeTexture {
     uint32_t kind, a, b, c;
   };
 
-  /// The pool's storage type.
-  using Pool = std::vector<uint32_t, detail::PoolAllocator<uint32_t>>;
-
  private:
   friend class detail::OctreeEditor;
   void visit_samples(void* ctx, void (*f)(void*, const OctreeSample&)) const;
@@ -240,7 +216,32 @@ class OctreeTexture {
   float origin_[3] = {0, 0, 0};
   float size_ = 0;
   Rgba8 background_ = 0;
-  Pool pool_{0, 0};  ///< root descriptor (ptr 0 = no block, info 0 = empty).
+  /// The pool's storage: one flat array of words that lookups read at random and painting
+  /// grows; past 2 MiB, 2 MiB-aligned and advised as huge pages (src/paint/octree.cpp), so one
+  /// TLB entry and one page fault cover 2 MiB instead of 4 KiB. Made as the empty root's two
+  /// words (ptr 0 = no block, info 0 = empty).
+  class Words {
+   public:
+    Words();
+    Words(const Words& o);
+    Words(Words&& o) noexcept;
+    Words& operator=(const Words& o);
+    Words& operator=(Words&& o) noexcept;
+    ~Words();
+    /// Grows (new words = v) or shrinks to n words. Amortised O(1) per word.
+    void resize(size_t n, uint32_t v = 0);
+    size_t size() const { return size_; }
+    uint32_t* data() { return data_; }
+    const uint32_t* data() const { return data_; }
+    uint32_t& operator[](size_t i) { return data_[i]; }
+    uint32_t operator[](size_t i) const { return data_[i]; }
+    operator std::span<const uint32_t>() const { return {data_, size_}; }
+
+   private:
+    uint32_t* data_ = nullptr;
+    size_t size_ = 0, capacity_ = 0;
+  };
+  Words pool_;
   /// free_[2n + b]: free blocks of n words, of bricks (b = 1) or general nodes (b = 0).
   std::vector<std::vector<uint32_t>> free_;
   /// The journal of the stroke being recorded, in order.
