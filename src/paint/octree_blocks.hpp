@@ -211,7 +211,7 @@ class OctreeEditor {
   static void redo_ops(OctreeTexture& t, std::span<const OctreeTexture::JournalOp> ops);
   static bool& recording(OctreeTexture& t) { return t.recording_; }
   static std::vector<OctreeTexture::JournalOp>& journal(OctreeTexture& t) { return t.journal_; }
-  /// The pool's storage, for a reader that fills it whole (octree_file.cpp).
+  /// The pool's storage, for a reader that fills it whole (file.cpp).
   static OctreeTexture::Words& pool(OctreeTexture& t) { return t.pool_; }
   static std::vector<std::vector<uint32_t>>& free_lists(OctreeTexture& t) { return t.free_; }
   static const std::vector<std::vector<uint32_t>>& free_lists(const OctreeTexture& t) {

@@ -1,6 +1,6 @@
 // The walks of a CPU lookup over the pool (nearest, trilinear taps, filtered), each compiled twice:
 // for processors with AVX2's integer set and for any other; and the sampler's cache they share.
-// Internal header of the paint layer: OctreeSampler (octree_lookup.cpp) calls them.
+// Internal header of the paint layer: OctreeSampler (lookup.cpp) calls them.
 #pragma once
 
 #include <cstdint>

@@ -90,7 +90,7 @@ class OctreeSampler {
   /// above that level (its sample facing n), or the average of the node at that level.
   bool cell_value(uint32_t x, uint32_t y, uint32_t z, int level, const float* n, Rgba8& out);
 
-  /// The nodes and bricks recent walks reached (src/paint/octree_lookup.cpp).
+  /// The nodes and bricks recent walks reached (src/paint/octree_walk.hpp).
   struct CacheSlot;
   struct Cache;
 

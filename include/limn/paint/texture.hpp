@@ -217,7 +217,7 @@ class OctreeTexture {
   float size_ = 0;
   Rgba8 background_ = 0;
   /// The pool's storage: one flat array of words that lookups read at random and painting
-  /// grows; past 2 MiB, 2 MiB-aligned and advised as huge pages (src/paint/octree.cpp), so one
+  /// grows; past 2 MiB, 2 MiB-aligned and advised as huge pages (src/paint/texture.cpp), so one
   /// TLB entry and one page fault cover 2 MiB instead of 4 KiB. Made as the empty root's two
   /// words (ptr 0 = no block, info 0 = empty).
   class Words {

@@ -1,7 +1,7 @@
 // octree: `vec3 oct_paint(base, pos, nrm)`, the octree texture lookup (a no-op unless a
 // GpuOctreeTexture is bound to the program), shared by the drawers and the lookup shader. Line for
-// line the walks of src/paint/octree_lookup.cpp (nearest, cell_value, filtered); 64-bit brick masks
-// as two words. Coordinates in double, as there, so both pick the same cells.
+// line the walks of src/paint/octree_walk.cpp and lookup.cpp (nearest, cell_value, filtered);
+// 64-bit brick masks as two words. Coordinates in double, as there, so both pick the same cells.
 layout(std430, binding = 5) readonly buffer OctreePool { uint pool[]; };
 uniform dvec3 oct_origin;
 uniform double oct_scale;  // 65536 / size
