@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 
+#include "core/closest_point.hpp"
 #include "core/vec3.hpp"
 #include "limn/mesh/morton.hpp"
 
@@ -278,30 +279,6 @@ __attribute__((always_inline)) inline uint32_t tri_boxes_meet8(const TriAxes& t,
           (q2 >= t.lo[k + 2]) & (q2 <= t.hi[k + 2]);
   }
   return lane_bits(ok);
-}
-
-// Closest point to p on triangle abc, by which Voronoi region of the triangle p projects into
-// (vertex, edge or face; Ericson, Real-Time Collision Detection, 5.1.5).
-inline V3 closest_on_triangle(V3 p, V3 a, V3 b, V3 c) {
-  const V3 ab = b - a, ac = c - a, ap = p - a;
-  const float d1 = dot(ab, ap), d2 = dot(ac, ap);
-  if (d1 <= 0 && d2 <= 0) return a;
-  const V3 bp = p - b;
-  const float d3 = dot(ab, bp), d4 = dot(ac, bp);
-  if (d3 >= 0 && d4 <= d3) return b;
-  const V3 cp = p - c;
-  const float d5 = dot(ab, cp), d6 = dot(ac, cp);
-  if (d6 >= 0 && d5 <= d6) return c;
-  const float vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + (d1 / (d1 - d3)) * ab;
-  const float vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + (d2 / (d2 - d6)) * ac;
-  const float va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
-    return b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b);
-  const float den = va + vb + vc;
-  if (!(den > 0)) return a;
-  return a + (vb / den) * ab + (vc / den) * ac;
 }
 
 using limn::morton3;

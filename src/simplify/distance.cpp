@@ -12,6 +12,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "core/closest_point.hpp"
 #include "core/vec3.hpp"
 
 namespace limn {
@@ -19,35 +20,6 @@ namespace limn {
 namespace {
 
 using P3 = Vec3d;
-
-// Closest point on triangle abc to p, by the Voronoi regions of its vertices, edges and face
-// (Ericson, Real-Time Collision Detection, sec. 5.1.5).
-P3 closest_on_triangle(P3 p, P3 a, P3 b, P3 c) {
-  const P3 ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = dot(ab, ap), d2 = dot(ac, ap);
-  if (d1 <= 0 && d2 <= 0) return a;
-  const P3 bp = p - b;
-  const double d3 = dot(ab, bp), d4 = dot(ac, bp);
-  if (d3 >= 0 && d4 <= d3) return b;
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + (d1 / (d1 - d3)) * ab;
-  const P3 cp = p - c;
-  const double d5 = dot(ab, cp), d6 = dot(ac, cp);
-  if (d6 >= 0 && d5 <= d6) return c;
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + (d2 / (d2 - d6)) * ac;
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
-    return b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b);
-  const double den = va + vb + vc;
-  if (!(den > 0)) {
-    // Degenerate triangle: the nearest of its three edges' end points will do.
-    const double da = dot(ap, ap), db = dot(bp, bp), dc = dot(cp, cp);
-    return da <= db && da <= dc ? a : db <= dc ? b : c;
-  }
-  const double v = vb / den, w = vc / den;
-  return a + v * ab + w * ac;
-}
 
 // A BVH over a mesh's faces (fanned into triangles) for closest-point queries.
 class ClosestPoint {
