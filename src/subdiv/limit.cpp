@@ -44,6 +44,91 @@ LimitStencils limit_stencils(const UniformRefinement& r, int level) {
   return limit_stencils(r.levels[size_t(level)]);
 }
 
+namespace {
+
+// The smooth rule's limit masks at an interior vertex v of valence n (n != 2): position and the
+// two tangents (the second the first turned by one sector), from its ring's edge-end and diagonal
+// vertices in rotational order.
+void smooth_masks(uint32_t v, int n, const std::vector<uint32_t>& ring_e,
+                  const std::vector<uint32_t>& ring_f, Weighted& P, Weighted& T1, Weighted& T2) {
+  const double pi = std::numbers::pi;
+  const double dn = n;
+  if (n == 4) {
+    P.add(v, 4.0 / 9.0);
+    for (int i = 0; i < 4; ++i) P.add(ring_e[i], 1.0 / 9.0), P.add(ring_f[i], 1.0 / 36.0);
+  } else {
+    const double fw = 1.0 / (dn * (dn + 5.0)), ew = 4.0 * fw;
+    P.add(v, 1.0 - dn * (ew + fw));
+    for (int i = 0; i < n; ++i) P.add(ring_e[i], ew), P.add(ring_f[i], fw);
+  }
+  std::vector<double> e1(n), f1(n);
+  if (n == 4) {
+    e1 = {4, 0, -4, 0};
+    f1 = {1, -1, -1, 1};
+  } else {
+    const double th = 2.0 * pi / dn, ct = std::cos(th), ch = std::cos(0.5 * th);
+    const double lambda = 5.0 / 16.0 + (ct + ch * std::sqrt(2.0 * (9.0 + ct))) / 16.0;
+    const double fs = 1.0 / (4.0 * lambda - 1.0);
+    for (int i = 0; i < n; ++i) {
+      e1[i] = 4.0 * std::cos(i * th);
+      f1[i] = fs * (std::cos(i * th) + std::cos((i + 1) * th));
+    }
+  }
+  for (int i = 0; i < n; ++i) {
+    T1.add(ring_e[i], e1[i]), T1.add(ring_f[i], f1[i]);
+    // The second tangent is the first rotated by one sector.
+    const int j = (i + n - 1) % n;
+    T2.add(ring_e[i], e1[j]), T2.add(ring_f[i], f1[j]);
+  }
+}
+
+// The crease rule's limit masks at v: position and the along-crease tangent from the crease's
+// two edges (es: each ring edge's sharpness), the across-crease tangent from the ring between
+// them (a convention where there is no rotational order).
+void crease_masks(const Topology& t, const uint32_t* fv, uint32_t v, uint32_t s0, bool manifold,
+                  const std::vector<uint32_t>& ring_e, const std::vector<uint32_t>& ring_f,
+                  const std::vector<float>& es, Weighted& P, Weighted& T1, Weighted& T2) {
+  const double pi = std::numbers::pi;
+  const int n_e = int(ring_e.size());
+  int c0 = -1, c1 = -1;
+  for (int i = 0; i < n_e; ++i)
+    if (es[i] > 0.0f) c1 = i, c0 = c0 < 0 ? i : c0;
+  P.add(v, 2.0 / 3.0);
+  P.add(ring_e[c0], 1.0 / 6.0), P.add(ring_e[c1], 1.0 / 6.0);
+  T1.add(ring_e[c0], 0.5), T1.add(ring_e[c1], -0.5);
+  const int interior = c1 - c0 - 1;
+  if (!manifold) {
+    // No rotational order (a non-manifold crease): the across-crease tangent is a
+    // convention, along an edge off the crease, like a corner's.
+    int off = -1;
+    for (int i = 0; i < n_e && off < 0; ++i)
+      if (i != c0 && i != c1) off = i;
+    const uint32_t c = t.vertex_corners[s0];
+    const uint32_t to = off >= 0 ? ring_e[size_t(off)] : fv[t.corner_prev[c]];
+    T2.add(v, -1.0), T2.add(to, 1.0);
+  } else if (interior == 1) {
+    T2.add(v, -4.0 / 6.0);
+    T2.add(ring_e[c0], -1.0 / 6.0), T2.add(ring_e[c0 + 1], 4.0 / 6.0);
+    T2.add(ring_e[c1], -1.0 / 6.0);
+    T2.add(ring_f[c0], 1.0 / 6.0), T2.add(ring_f[c0 + 1], 1.0 / 6.0);
+  } else if (interior > 1) {
+    const double k = interior + 1, th = pi / k, ct = std::cos(th), st = std::sin(th);
+    const double denom = 1.0 / (k * (3.0 + ct)), R = (ct + 1.0) / st;
+    T2.add(v, 4.0 * R * (ct - 1.0) * denom);
+    T2.add(ring_e[c0], -R * (1.0 + 2.0 * ct) * denom);
+    T2.add(ring_e[c1], -R * (1.0 + 2.0 * ct) * denom);
+    T2.add(ring_f[c0], st * denom);
+    for (int i = 1; i < k; ++i) {
+      T2.add(ring_e[c0 + i], 4.0 * std::sin(i * th) * denom);
+      T2.add(ring_f[c0 + i], (std::sin(i * th) + std::sin((i + 1) * th)) * denom);
+    }
+  } else {
+    T2.add(v, -6.0), T2.add(ring_e[c0], 3.0), T2.add(ring_e[c1], 3.0);
+  }
+}
+
+}  // namespace
+
 LimitStencils limit_stencils(const RefinedLevel& L) {
   for (size_t f = 0; f < L.face_count(); ++f)
     if (L.face_offsets[f + 1] - L.face_offsets[f] != 4)
@@ -72,7 +157,6 @@ LimitStencils limit_stencils(const RefinedLevel& L) {
   Weighted P, T1, T2;
   std::vector<uint32_t> ring_e, ring_f;  // other-end vertex per edge; diagonal vertex per face
   std::vector<float> es;
-  const double pi = std::numbers::pi;
 
   for (uint32_t v = 0; v < nv; ++v) {
     const uint32_t s0 = t.vertex_offsets[v], nfaces = t.vertex_offsets[v + 1] - s0;
@@ -146,74 +230,10 @@ LimitStencils limit_stencils(const RefinedLevel& L) {
       if (n == 2) {  // OpenSubdiv treats a smooth valence-2 vertex as a corner
         rule = 2;
       } else {
-        const double dn = n;
-        if (n == 4) {
-          P.add(v, 4.0 / 9.0);
-          for (int i = 0; i < 4; ++i) P.add(ring_e[i], 1.0 / 9.0), P.add(ring_f[i], 1.0 / 36.0);
-        } else {
-          const double fw = 1.0 / (dn * (dn + 5.0)), ew = 4.0 * fw;
-          P.add(v, 1.0 - dn * (ew + fw));
-          for (int i = 0; i < n; ++i) P.add(ring_e[i], ew), P.add(ring_f[i], fw);
-        }
-        std::vector<double> e1(n), f1(n);
-        if (n == 4) {
-          e1 = {4, 0, -4, 0};
-          f1 = {1, -1, -1, 1};
-        } else {
-          const double th = 2.0 * pi / dn, ct = std::cos(th), ch = std::cos(0.5 * th);
-          const double lambda = 5.0 / 16.0 + (ct + ch * std::sqrt(2.0 * (9.0 + ct))) / 16.0;
-          const double fs = 1.0 / (4.0 * lambda - 1.0);
-          for (int i = 0; i < n; ++i) {
-            e1[i] = 4.0 * std::cos(i * th);
-            f1[i] = fs * (std::cos(i * th) + std::cos((i + 1) * th));
-          }
-        }
-        for (int i = 0; i < n; ++i) {
-          T1.add(ring_e[i], e1[i]), T1.add(ring_f[i], f1[i]);
-          // The second tangent is the first rotated by one sector.
-          const int j = (i + n - 1) % n;
-          T2.add(ring_e[i], e1[j]), T2.add(ring_f[i], f1[j]);
-        }
+        smooth_masks(v, n, ring_e, ring_f, P, T1, T2);
       }
     }
-    if (rule == 1) {
-      int c0 = -1, c1 = -1;
-      for (int i = 0; i < n_e; ++i)
-        if (es[i] > 0.0f) c1 = i, c0 = c0 < 0 ? i : c0;
-      P.add(v, 2.0 / 3.0);
-      P.add(ring_e[c0], 1.0 / 6.0), P.add(ring_e[c1], 1.0 / 6.0);
-      T1.add(ring_e[c0], 0.5), T1.add(ring_e[c1], -0.5);
-      const int interior = c1 - c0 - 1;
-      if (!manifold) {
-        // No rotational order (a non-manifold crease): the across-crease tangent is a
-        // convention, along an edge off the crease, like a corner's.
-        int off = -1;
-        for (int i = 0; i < n_e && off < 0; ++i)
-          if (i != c0 && i != c1) off = i;
-        const uint32_t c = t.vertex_corners[s0];
-        const uint32_t to = off >= 0 ? ring_e[size_t(off)] : fv[t.corner_prev[c]];
-        T2.add(v, -1.0), T2.add(to, 1.0);
-      } else if (interior == 1) {
-        T2.add(v, -4.0 / 6.0);
-        T2.add(ring_e[c0], -1.0 / 6.0), T2.add(ring_e[c0 + 1], 4.0 / 6.0);
-        T2.add(ring_e[c1], -1.0 / 6.0);
-        T2.add(ring_f[c0], 1.0 / 6.0), T2.add(ring_f[c0 + 1], 1.0 / 6.0);
-      } else if (interior > 1) {
-        const double k = interior + 1, th = pi / k, ct = std::cos(th), st = std::sin(th);
-        const double denom = 1.0 / (k * (3.0 + ct)), R = (ct + 1.0) / st;
-        T2.add(v, 4.0 * R * (ct - 1.0) * denom);
-        T2.add(ring_e[c0], -R * (1.0 + 2.0 * ct) * denom);
-        T2.add(ring_e[c1], -R * (1.0 + 2.0 * ct) * denom);
-        T2.add(ring_f[c0], st * denom);
-        for (int i = 1; i < k; ++i) {
-          T2.add(ring_e[c0 + i], 4.0 * std::sin(i * th) * denom);
-          T2.add(ring_f[c0 + i], (std::sin(i * th) + std::sin((i + 1) * th)) * denom);
-        }
-      } else {
-        T2.add(v, -6.0), T2.add(ring_e[c0], 3.0), T2.add(ring_e[c1], 3.0);
-      }
-      (void)n_f;
-    }
+    if (rule == 1) crease_masks(t, fv, v, s0, manifold, ring_e, ring_f, es, P, T1, T2);
     if (rule == 2) {
       P.add(v, 1.0);
       // Corner tangents: along the first two edges of the ring (any two for non-manifold).

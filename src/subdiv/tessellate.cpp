@@ -44,6 +44,10 @@ class Tessellator {
               const TessellateOptions& o)
       : cage_(cage), t_(t), pts_(pts), o_(o) {}
   Mesh run();
+  void evaluate(std::vector<uint32_t> tris, Mesh& out) const;
+  std::vector<std::array<int, 4>> edge_rates(int n) const;
+  void edge_samples(const std::vector<std::array<int, 4>>& rate, std::vector<uint32_t>& edge_line,
+                    std::vector<std::pair<uint32_t, int64_t>>& samples) const;
 
  private:
   struct Line {
@@ -167,6 +171,84 @@ uint32_t Tessellator::vertex(const Key& k, uint32_t patch, float s, float t) {
   return it->second;
 }
 
+// Segments per patch edge: `n` (the factor), or from the edge's length on screen (its corners
+// projected; the next power of two of length / pixels_per_segment, 1-64).
+std::vector<std::array<int, 4>> Tessellator::edge_rates(int n) const {
+  const size_t np = t_.patch_count();
+  std::vector<std::array<int, 4>> rate(np, {n, n, n, n});
+  if (!o_.camera) return rate;
+  std::vector<PatchCoord> corners;
+  for (uint32_t i = 0; i < np; ++i)
+    for (int c = 0; c < 4; ++c) corners.push_back({i, float(c == 1 || c == 2), float(c >= 2)});
+  std::vector<float> cp(3 * corners.size());
+  evaluate_patches(t_, pts_, corners, cp.data());
+  for (size_t i = 0; i < np; ++i)
+    for (int e = 0; e < 4; ++e) {
+      double x0, y0, x1, y1;
+      const float* a = &cp[3 * (4 * i + size_t(e))];
+      const float* b = &cp[3 * (4 * i + size_t(e + 1) % 4)];
+      int r = 64;
+      if (o_.camera->project(a, x0, y0) && o_.camera->project(b, x1, y1)) {
+        const double segs = std::hypot(x1 - x0, y1 - y0) / o_.pixels_per_segment;
+        r = 1;
+        while (r < 64 && r < segs) r *= 2;
+      }
+      rate[i][size_t(e)] = r;
+    }
+  return rate;
+}
+
+// Every patch edge's samples on its line (edge_line: per patch edge, its line's id), as (line,
+// parameter) pairs, sorted and deduplicated.
+void Tessellator::edge_samples(const std::vector<std::array<int, 4>>& rate,
+                               std::vector<uint32_t>& edge_line,
+                               std::vector<std::pair<uint32_t, int64_t>>& samples) const {
+  const size_t nr = t_.regular_params.size(), np = t_.patch_count();
+  auto param = [&](size_t i) -> const PatchParam& {
+    return i < nr ? t_.regular_params[i] : t_.gregory_params[i - nr];
+  };
+  std::unordered_map<Key, uint32_t, KeyHash> line_of;
+  line_of.reserve(3 * np);
+  for (size_t i = 0; i < np; ++i)
+    for (int e = 0; e < 4; ++e) {
+      int64_t len;
+      const Line l = patch_edge(param(i), e, len);
+      const uint32_t id = line_of.try_emplace(l.key, uint32_t(line_of.size())).first->second;
+      edge_line[4 * i + size_t(e)] = id;
+      const int m = rate[i][size_t(e)];
+      for (int k = 0; k <= m; ++k) samples.emplace_back(id, l.q0 + l.dq * (len * k / m));
+    }
+  std::sort(samples.begin(), samples.end());
+  samples.erase(std::unique(samples.begin(), samples.end()), samples.end());
+}
+
+// The mesh's vertices evaluated once each, with normals and depth colours as asked; `tris` its
+// triangles.
+void Tessellator::evaluate(std::vector<uint32_t> tris, Mesh& out) const {
+  const size_t nr = t_.regular_params.size();
+  auto param = [&](size_t i) -> const PatchParam& {
+    return i < nr ? t_.regular_params[i] : t_.gregory_params[i - nr];
+  };
+  const size_t nv = coords_.size();
+  out.positions.resize(3 * nv);
+  std::vector<float> du(3 * nv), dv(3 * nv);
+  evaluate_patches(t_, pts_, coords_, out.positions.data(), du.data(), dv.data());
+  out.face_vertices = std::move(tris);
+  out.face_offsets.resize(out.face_vertices.size() / 3 + 1);
+  for (size_t f = 0; f < out.face_offsets.size(); ++f) out.face_offsets[f] = uint32_t(3 * f);
+  if (o_.normals) {
+    out.normals = normals_from_tangents(du, dv);
+    out.normal_indices = out.face_vertices;
+  }
+  if (o_.depth_colors) {
+    out.colors.resize(4 * nv);
+    for (size_t v = 0; v < nv; ++v) {
+      depth_color(param(coords_[v].patch).level, &out.colors[4 * v]);
+      out.colors[4 * v + 3] = 1.0f;
+    }
+  }
+}
+
 Mesh Tessellator::run() {
   const bool screen = o_.camera != nullptr;
   const int n = screen ? 64 : o_.factor;  // screen-space rates are powers of two up to 64
@@ -190,49 +272,14 @@ Mesh Tessellator::run() {
   }
   if (ptex_.size() != t_.ptex_count) throw InputError("tessellate: the table is not this cage's");
 
-  // Segments per patch edge: the factor, or from the edge's length on screen (its corners
-  // projected; the next power of two of length / pixels_per_segment, 1-64).
-  std::vector<std::array<int, 4>> rate(np, {n, n, n, n});
-  if (screen) {
-    std::vector<PatchCoord> corners;
-    for (uint32_t i = 0; i < np; ++i)
-      for (int c = 0; c < 4; ++c) corners.push_back({i, float(c == 1 || c == 2), float(c >= 2)});
-    std::vector<float> cp(3 * corners.size());
-    evaluate_patches(t_, pts_, corners, cp.data());
-    for (size_t i = 0; i < np; ++i)
-      for (int e = 0; e < 4; ++e) {
-        double x0, y0, x1, y1;
-        const float* a = &cp[3 * (4 * i + size_t(e))];
-        const float* b = &cp[3 * (4 * i + size_t(e + 1) % 4)];
-        int r = 64;
-        if (o_.camera->project(a, x0, y0) && o_.camera->project(b, x1, y1)) {
-          const double segs = std::hypot(x1 - x0, y1 - y0) / o_.pixels_per_segment;
-          r = 1;
-          while (r < 64 && r < segs) r *= 2;
-        }
-        rate[i][size_t(e)] = r;
-      }
-  }
+  // Segments per patch edge: the factor, or from the edge's length on screen.
+  const std::vector<std::array<int, 4>> rate = edge_rates(n);
 
   // Pass 1: every patch edge's own samples on its line, as (line, parameter) pairs in one flat
   // array; sorted and deduplicated, each line's samples are one range of it.
   std::vector<uint32_t> edge_line(4 * np);
   std::vector<std::pair<uint32_t, int64_t>> samples;
-  {
-    std::unordered_map<Key, uint32_t, KeyHash> line_of;
-    line_of.reserve(3 * np);
-    for (size_t i = 0; i < np; ++i)
-      for (int e = 0; e < 4; ++e) {
-        int64_t len;
-        const Line l = patch_edge(param(i), e, len);
-        const uint32_t id = line_of.try_emplace(l.key, uint32_t(line_of.size())).first->second;
-        edge_line[4 * i + size_t(e)] = id;
-        const int m = rate[i][size_t(e)];
-        for (int k = 0; k <= m; ++k) samples.emplace_back(id, l.q0 + l.dq * (len * k / m));
-      }
-    std::sort(samples.begin(), samples.end());
-    samples.erase(std::unique(samples.begin(), samples.end()), samples.end());
-  }
+  edge_samples(rate, edge_line, samples);
   auto line_begin = [&](uint32_t id, int64_t q) {
     return std::lower_bound(samples.begin(), samples.end(), std::make_pair(id, q));
   };
@@ -338,24 +385,7 @@ Mesh Tessellator::run() {
   }
 
   // Evaluate every vertex once.
-  const size_t nv = coords_.size();
-  out.positions.resize(3 * nv);
-  std::vector<float> du(3 * nv), dv(3 * nv);
-  evaluate_patches(t_, pts_, coords_, out.positions.data(), du.data(), dv.data());
-  out.face_vertices = std::move(tris);
-  out.face_offsets.resize(out.face_vertices.size() / 3 + 1);
-  for (size_t f = 0; f < out.face_offsets.size(); ++f) out.face_offsets[f] = uint32_t(3 * f);
-  if (o_.normals) {
-    out.normals = normals_from_tangents(du, dv);
-    out.normal_indices = out.face_vertices;
-  }
-  if (o_.depth_colors) {
-    out.colors.resize(4 * nv);
-    for (size_t v = 0; v < nv; ++v) {
-      depth_color(param(coords_[v].patch).level, &out.colors[4 * v]);
-      out.colors[4 * v + 3] = 1.0f;
-    }
-  }
+  evaluate(std::move(tris), out);
   return out;
 }
 
