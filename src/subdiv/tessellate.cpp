@@ -44,6 +44,11 @@ class Tessellator {
               const TessellateOptions& o)
       : cage_(cage), t_(t), pts_(pts), o_(o) {}
   Mesh run();
+  // Patch i of the table: its regular patches first, then its end caps.
+  const PatchParam& param(size_t i) const {
+    const size_t nr = t_.regular_params.size();
+    return i < nr ? t_.regular_params[i] : t_.gregory_params[i - nr];
+  }
   void evaluate(std::vector<uint32_t> tris, Mesh& out) const;
   std::vector<std::array<int, 4>> edge_rates(int n) const;
   void edge_samples(const std::vector<std::array<int, 4>>& rate, std::vector<uint32_t>& edge_line,
@@ -203,10 +208,7 @@ std::vector<std::array<int, 4>> Tessellator::edge_rates(int n) const {
 void Tessellator::edge_samples(const std::vector<std::array<int, 4>>& rate,
                                std::vector<uint32_t>& edge_line,
                                std::vector<std::pair<uint32_t, int64_t>>& samples) const {
-  const size_t nr = t_.regular_params.size(), np = t_.patch_count();
-  auto param = [&](size_t i) -> const PatchParam& {
-    return i < nr ? t_.regular_params[i] : t_.gregory_params[i - nr];
-  };
+  const size_t np = t_.patch_count();
   std::unordered_map<Key, uint32_t, KeyHash> line_of;
   line_of.reserve(3 * np);
   for (size_t i = 0; i < np; ++i)
@@ -225,10 +227,6 @@ void Tessellator::edge_samples(const std::vector<std::array<int, 4>>& rate,
 // The mesh's vertices evaluated once each, with normals and depth colours as asked; `tris` its
 // triangles.
 void Tessellator::evaluate(std::vector<uint32_t> tris, Mesh& out) const {
-  const size_t nr = t_.regular_params.size();
-  auto param = [&](size_t i) -> const PatchParam& {
-    return i < nr ? t_.regular_params[i] : t_.gregory_params[i - nr];
-  };
   const size_t nv = coords_.size();
   out.positions.resize(3 * nv);
   std::vector<float> du(3 * nv), dv(3 * nv);
@@ -260,10 +258,7 @@ Mesh Tessellator::run() {
   if (cage_.vertex_count() >= (1u << 28))
     throw InputError("tessellate: the cage has too many vertices (2^28 at most)");
   int max_depth = 0;
-  const size_t nr = t_.regular_params.size(), np = t_.patch_count();
-  auto param = [&](size_t i) -> const PatchParam& {
-    return i < nr ? t_.regular_params[i] : t_.gregory_params[i - nr];
-  };
+  const size_t np = t_.patch_count();
   for (size_t i = 0; i < np; ++i) max_depth = std::max<int>(max_depth, param(i).depth);
   R_ = int64_t(n) << max_depth;
   for (uint32_t f = 0; f < cage_.face_count(); ++f) {
