@@ -14,29 +14,11 @@
 #include <stdexcept>
 #include <utility>
 
+#include "limit_masks.hpp"
 #include "limn/mesh/topology.hpp"
 #include "limn/subdiv/refine.hpp"
 
 namespace limn {
-
-namespace {
-
-struct Weighted {
-  std::vector<std::pair<uint32_t, double>> terms;
-  void add(uint32_t v, double w) {
-    if (w != 0.0) terms.emplace_back(v, w);
-  }
-  void emit(StencilTable& t) {
-    for (const auto& [v, w] : terms) {
-      t.indices.push_back(v);
-      t.weights.push_back(static_cast<float>(w));
-    }
-    t.offsets.push_back(static_cast<uint32_t>(t.indices.size()));
-    terms.clear();
-  }
-};
-
-}  // namespace
 
 LimitStencils limit_stencils(const UniformRefinement& r, int level) {
   if (level < 0 || level >= int(r.levels.size()))
@@ -129,19 +111,18 @@ void crease_masks(const Topology& t, const uint32_t* fv, uint32_t v, uint32_t s0
 
 }  // namespace
 
-LimitStencils limit_stencils(const RefinedLevel& L) {
+LimitMasks::LimitMasks(const RefinedLevel& L)
+    : L_(L), t_(build_topology(L.vertex_count(), L.face_offsets, L.face_vertices)) {
   for (size_t f = 0; f < L.face_count(); ++f)
     if (L.face_offsets[f + 1] - L.face_offsets[f] != 4)
       throw InputError("limit: the level has non-quad faces; refine at least once");
-  const size_t nv = L.vertex_count();
-  const Topology t = build_topology(nv, L.face_offsets, L.face_vertices);
+  const Topology& t = t_;
   const uint32_t* fv = L.face_vertices.data();
-
   // The level numbers its edges its own way (derived levels do not follow build_topology's
   // order), so carry each level edge's sharpness over to the corner table's edge ids.
   if (L.edge_vertices.size() != 2 * t.edge_count() || L.edge_sharpness.size() != t.edge_count())
     throw std::logic_error("limit: the level's edge list does not match its faces");
-  std::vector<float> sharp_of_edge(t.edge_count(), 0.0f);
+  sharp_of_edge_.assign(t.edge_count(), 0.0f);
   for (size_t e = 0; e < t.edge_count(); ++e) {
     const uint32_t a = L.edge_vertices[2 * e], b = L.edge_vertices[2 * e + 1];
     uint32_t id = kNone;
@@ -149,104 +130,115 @@ LimitStencils limit_stencils(const RefinedLevel& L) {
       for (uint32_t i = t.vertex_offsets[from]; i < t.vertex_offsets[from + 1] && id == kNone; ++i)
         if (fv[t.corner_next[t.vertex_corners[i]]] == to) id = t.corner_edge[t.vertex_corners[i]];
     if (id == kNone) throw std::logic_error("limit: a level edge joins no face's corners");
-    sharp_of_edge[id] = L.edge_sharpness[e];
+    sharp_of_edge_[id] = L.edge_sharpness[e];
   }
+}
 
+void LimitMasks::compute(uint32_t v, Weighted& P, Weighted& T1, Weighted& T2) {
+  const Topology& t = t_;
+  const RefinedLevel& L = L_;
+  const uint32_t* fv = L.face_vertices.data();
+  std::vector<uint32_t>& ring_e = ring_e_;  // other-end vertex per edge
+  std::vector<uint32_t>& ring_f = ring_f_;  // diagonal vertex per face
+  std::vector<float>& es = es_;
+  const std::vector<float>& sharp_of_edge = sharp_of_edge_;
+  const uint32_t s0 = t.vertex_offsets[v], nfaces = t.vertex_offsets[v + 1] - s0;
+  if (nfaces == 0) {  // isolated vertex: stays where it is
+    P.add(v, 1.0);
+    return;
+  }
+  // Rotational order. Start: the corner whose outgoing half-edge is a boundary, else the first
+  // (lowest face) corner.
+  uint32_t start = t.vertex_corners[s0];
+  bool manifold = true, boundary = false;
+  for (uint32_t i = 0; i < nfaces; ++i) {
+    const uint32_t c = t.vertex_corners[s0 + i];
+    // Shared by more than two faces, or by two that disagree on its direction: no fan.
+    auto torn = [&](uint32_t h) {
+      const uint32_t tw = t.corner_twin[h];
+      return tw == kNonManifold || (tw != kNone && fv[tw] == fv[h]);
+    };
+    if (torn(c) || torn(t.corner_prev[c])) manifold = false;
+    if (t.corner_twin[c] == kNone && !boundary) start = c, boundary = true;
+  }
+  ring_e.clear(), ring_f.clear(), es.clear();
+  if (manifold) {
+    uint32_t c = start;
+    for (uint32_t i = 0; i < nfaces; ++i) {
+      ring_e.push_back(fv[t.corner_next[c]]);
+      es.push_back(sharp_of_edge[t.corner_edge[c]]);
+      ring_f.push_back(fv[t.corner_next[t.corner_next[c]]]);
+      const uint32_t in = t.corner_prev[c];
+      const uint32_t tw = t.corner_twin[in];
+      if (tw == kNone) {  // reached the other boundary edge
+        ring_e.push_back(fv[in]);
+        es.push_back(sharp_of_edge[t.corner_edge[in]]);
+        break;
+      }
+      if (tw == start || tw >= kNonManifold) break;
+      c = tw;
+    }
+    // A vertex whose faces do not form one fan (a bowtie) is non-manifold.
+    if (ring_f.size() != nfaces) manifold = false;
+  }
+  if (!manifold) {
+    // No rotational order exists: take the incident edges in star order for the rule and the
+    // crease ends (a non-manifold crease is two non-manifold edges, as OpenSubdiv tags it).
+    ring_e.clear(), ring_f.clear(), es.clear();
+    for (uint32_t i = 0; i < nfaces; ++i) {
+      const uint32_t c = t.vertex_corners[s0 + i];
+      for (const uint32_t h : {c, t.corner_prev[c]}) {
+        const uint32_t other = h == c ? fv[t.corner_next[c]] : fv[h];
+        if (std::find(ring_e.begin(), ring_e.end(), other) != ring_e.end()) continue;
+        ring_e.push_back(other);
+        es.push_back(sharp_of_edge[t.corner_edge[h]]);
+      }
+    }
+  }
+  const bool is_corner_rule = false;
+  int sharp_edges = 0;
+  for (float x : es) sharp_edges += x > 0.0f;
+  const float vs = L.vertex_sharpness[v];
+  const int n_e = int(ring_e.size()), n_f = int(ring_f.size());
+  int rule;  // 0 smooth/dart, 1 crease, 2 corner
+  if (is_corner_rule || vs > 0.0f || sharp_edges > 2)
+    rule = 2;
+  else
+    rule = sharp_edges == 2 ? 1 : 0;
+
+  if (rule == 0 && !manifold) rule = 2;  // smooth needs a fan; OpenSubdiv sharpens these
+  if (rule == 0) {
+    const int n = n_f;
+    if (n == 2) {  // OpenSubdiv treats a smooth valence-2 vertex as a corner
+      rule = 2;
+    } else {
+      smooth_masks(v, n, ring_e, ring_f, P, T1, T2);
+    }
+  }
+  if (rule == 1) crease_masks(t, fv, v, s0, manifold, ring_e, ring_f, es, P, T1, T2);
+  if (rule == 2) {
+    P.add(v, 1.0);
+    // Corner tangents: along the first two edges of the ring (any two for non-manifold).
+    if (n_e >= 2) {
+      T1.add(v, -1.0), T1.add(ring_e[0], 1.0);
+      T2.add(v, -1.0), T2.add(ring_e[1], 1.0);
+    } else {
+      // Non-manifold: tangents along the first two edges of the first face.
+      const uint32_t c = t.vertex_corners[s0];
+      T1.add(v, -1.0), T1.add(fv[t.corner_next[c]], 1.0);
+      T2.add(v, -1.0), T2.add(fv[t.corner_prev[c]], 1.0);
+    }
+  }
+}
+
+LimitStencils limit_stencils(const RefinedLevel& L) {
+  LimitMasks masks(L);
+  const size_t nv = L.vertex_count();
   LimitStencils out;
   for (auto* s : {&out.position, &out.tangent1, &out.tangent2}) s->offsets.reserve(nv + 1);
   Weighted P, T1, T2;
-  std::vector<uint32_t> ring_e, ring_f;  // other-end vertex per edge; diagonal vertex per face
-  std::vector<float> es;
-
   for (uint32_t v = 0; v < nv; ++v) {
-    const uint32_t s0 = t.vertex_offsets[v], nfaces = t.vertex_offsets[v + 1] - s0;
-    if (nfaces == 0) {  // isolated vertex: stays where it is
-      P.add(v, 1.0);
-      P.emit(out.position), T1.emit(out.tangent1), T2.emit(out.tangent2);
-      continue;
-    }
-    // Rotational order. Start: the corner whose outgoing half-edge is a boundary, else the first
-    // (lowest face) corner.
-    uint32_t start = t.vertex_corners[s0];
-    bool manifold = true, boundary = false;
-    for (uint32_t i = 0; i < nfaces; ++i) {
-      const uint32_t c = t.vertex_corners[s0 + i];
-      // Shared by more than two faces, or by two that disagree on its direction: no fan.
-      auto torn = [&](uint32_t h) {
-        const uint32_t tw = t.corner_twin[h];
-        return tw == kNonManifold || (tw != kNone && fv[tw] == fv[h]);
-      };
-      if (torn(c) || torn(t.corner_prev[c])) manifold = false;
-      if (t.corner_twin[c] == kNone && !boundary) start = c, boundary = true;
-    }
-    ring_e.clear(), ring_f.clear(), es.clear();
-    if (manifold) {
-      uint32_t c = start;
-      for (uint32_t i = 0; i < nfaces; ++i) {
-        ring_e.push_back(fv[t.corner_next[c]]);
-        es.push_back(sharp_of_edge[t.corner_edge[c]]);
-        ring_f.push_back(fv[t.corner_next[t.corner_next[c]]]);
-        const uint32_t in = t.corner_prev[c];
-        const uint32_t tw = t.corner_twin[in];
-        if (tw == kNone) {  // reached the other boundary edge
-          ring_e.push_back(fv[in]);
-          es.push_back(sharp_of_edge[t.corner_edge[in]]);
-          break;
-        }
-        if (tw == start || tw >= kNonManifold) break;
-        c = tw;
-      }
-      // A vertex whose faces do not form one fan (a bowtie) is non-manifold.
-      if (ring_f.size() != nfaces) manifold = false;
-    }
-    if (!manifold) {
-      // No rotational order exists: take the incident edges in star order for the rule and the
-      // crease ends (a non-manifold crease is two non-manifold edges, as OpenSubdiv tags it).
-      ring_e.clear(), ring_f.clear(), es.clear();
-      for (uint32_t i = 0; i < nfaces; ++i) {
-        const uint32_t c = t.vertex_corners[s0 + i];
-        for (const uint32_t h : {c, t.corner_prev[c]}) {
-          const uint32_t other = h == c ? fv[t.corner_next[c]] : fv[h];
-          if (std::find(ring_e.begin(), ring_e.end(), other) != ring_e.end()) continue;
-          ring_e.push_back(other);
-          es.push_back(sharp_of_edge[t.corner_edge[h]]);
-        }
-      }
-    }
-    const bool is_corner_rule = false;
-    int sharp_edges = 0;
-    for (float x : es) sharp_edges += x > 0.0f;
-    const float vs = L.vertex_sharpness[v];
-    const int n_e = int(ring_e.size()), n_f = int(ring_f.size());
-    int rule;  // 0 smooth/dart, 1 crease, 2 corner
-    if (is_corner_rule || vs > 0.0f || sharp_edges > 2)
-      rule = 2;
-    else
-      rule = sharp_edges == 2 ? 1 : 0;
-
-    if (rule == 0 && !manifold) rule = 2;  // smooth needs a fan; OpenSubdiv sharpens these
-    if (rule == 0) {
-      const int n = n_f;
-      if (n == 2) {  // OpenSubdiv treats a smooth valence-2 vertex as a corner
-        rule = 2;
-      } else {
-        smooth_masks(v, n, ring_e, ring_f, P, T1, T2);
-      }
-    }
-    if (rule == 1) crease_masks(t, fv, v, s0, manifold, ring_e, ring_f, es, P, T1, T2);
-    if (rule == 2) {
-      P.add(v, 1.0);
-      // Corner tangents: along the first two edges of the ring (any two for non-manifold).
-      if (n_e >= 2) {
-        T1.add(v, -1.0), T1.add(ring_e[0], 1.0);
-        T2.add(v, -1.0), T2.add(ring_e[1], 1.0);
-      } else {
-        // Non-manifold: tangents along the first two edges of the first face.
-        const uint32_t c = t.vertex_corners[s0];
-        T1.add(v, -1.0), T1.add(fv[t.corner_next[c]], 1.0);
-        T2.add(v, -1.0), T2.add(fv[t.corner_prev[c]], 1.0);
-      }
-    }
+    masks.compute(v, P, T1, T2);
     P.emit(out.position), T1.emit(out.tangent1), T2.emit(out.tangent2);
   }
   return out;

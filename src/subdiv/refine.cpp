@@ -19,7 +19,9 @@
 // levels get theirs in closed form too (sparse_child_adj), with one corner per selected face.
 #include "limn/subdiv/refine.hpp"
 #include "corner_twins.hpp"
+#include "face_varying.hpp"
 #include "refine_levels.hpp"
+#include "rules.hpp"
 #include "shared_weights.hpp"
 
 #include <fmt/format.h>
@@ -46,125 +48,6 @@
 namespace limn {
 
 namespace refine_detail {
-
-constexpr float kInf = kInfiniteSharpness;
-
-bool semi_sharp(float s) {
-  return s > 0.0f && s < kInf;
-}
-
-float decrement(float s) {
-  if (s <= 0.0f) return 0.0f;
-  if (s >= kInf) return kInf;
-  return s > 1.0f ? s - 1.0f : 0.0f;
-}
-
-enum Rule : uint8_t { kSmooth = 1, kDart = 2, kCrease = 4, kCorner = 8 };
-
-Rule vertex_rule(float vertex_sharpness, int sharp_edges) {
-  if (sharp(vertex_sharpness)) return kCorner;
-  return sharp_edges > 2 ? kCorner : static_cast<Rule>(1 << sharp_edges);
-}
-
-// Sharpness of the child edges around a vertex (Sdc::Crease::SubdivideEdgeSharpnessesAround-
-// Vertex): uniform decrements; Chaikin blends each semi-sharp edge with the mean of the others.
-void child_edge_sharpness(const SubdivOptions& o, const float* parent, int n, float* child) {
-  if (o.crease_method != CreaseMethod::chaikin || n < 2) {
-    for (int i = 0; i < n; ++i) child[i] = decrement(parent[i]);
-    return;
-  }
-  float sum = 0.0f;
-  int count = 0;
-  for (int i = 0; i < n; ++i)
-    if (semi_sharp(parent[i])) sum += parent[i], ++count;
-  for (int i = 0; i < n; ++i) {
-    const float p = parent[i];
-    if (!sharp(p)) {
-      child[i] = 0.0f;
-    } else if (p >= kInf) {
-      child[i] = kInf;
-    } else if (count == 1) {
-      child[i] = decrement(p);
-    } else {
-      const float others = (sum - p) / static_cast<float>(count - 1);
-      const float c = (0.75f * p + 0.25f * others) - 1.0f;
-      child[i] = sharp(c) ? c : 0.0f;
-    }
-  }
-}
-
-// Sdc::Crease::ComputeFractionalWeightAtVertex.
-float fractional_weight(const SubdivOptions& o, float pv, float cv, const float* pe,
-                        const float* ce, int n) {
-  int count = 0;
-  float sum = 0.0f;
-  if (sharp(pv) && !sharp(cv)) count = 1, sum = pv;
-  for (int i = 0; i < n; ++i) {
-    const bool transition = o.crease_method == CreaseMethod::chaikin
-                                ? sharp(pe[i]) && !sharp(ce[i])
-                                : sharp(pe[i]) && pe[i] <= 1.0f;
-    if (transition) sum += pe[i], ++count;
-  }
-  if (count == 0) return 0.0f;
-  const float w = sum / static_cast<float>(count);
-  return w > 1.0f ? 1.0f : w;
-}
-
-// A stencil under construction: weighted parent vertices, merged per vertex as they are added
-// (stencils hold a handful of distinct vertices, so a linear scan beats sorting). A 64-bit
-// filter of the vertices seen skips the scan for most new vertices: regular stencils have no
-// repeats at all.
-struct Terms {
-  std::vector<uint32_t> idx;
-  std::vector<double> w;
-  size_t n = 0;
-  uint64_t seen = 0;
-  Terms() : idx(64), w(64) {}
-  [[gnu::always_inline]] inline void add(uint32_t v, double weight) {
-    const uint64_t bit = uint64_t(1) << ((v * 0x9E3779B1u) >> 26);
-    if (seen & bit) {
-      uint32_t* ix = idx.data();
-      for (size_t i = 0; i < n; ++i)
-        if (ix[i] == v) {
-          w[i] += weight;
-          return;
-        }
-    }
-    seen |= bit;
-    if (n == idx.size()) grow();
-    idx[n] = v, w[n] = weight, ++n;
-  }
-  void grow() {
-    idx.resize(2 * n);
-    w.resize(2 * n);
-  }
-  void scale(double s) {
-    for (size_t i = 0; i < n; ++i) w[i] *= s;
-  }
-  void append(const Terms& other, double s) {
-    for (size_t i = 0; i < other.n; ++i) add(other.idx[i], other.w[i] * s);
-  }
-  void clear() { n = 0, seen = 0; }
-  // Appends the stencil (inserted, not resized and overwritten: a zero fill per stencil cost
-  // as much as computing it).
-  void emit(StencilTable& table) {
-    const size_t base = table.indices.size();
-    if (base + n > table.indices.capacity()) {
-      table.indices.reserve(2 * (base + n));
-      table.weights.reserve(2 * (base + n));
-    }
-    float inline_w[kMaxInline];
-    std::vector<float> big;
-    float* wf = inline_w;
-    if (n > kMaxInline) big.resize(n), wf = big.data();
-    for (size_t i = 0; i < n; ++i) wf[i] = static_cast<float>(w[i]);
-    table.indices.insert(table.indices.end(), idx.data(), idx.data() + n);
-    table.weights.insert(table.weights.end(), wf, wf + n);
-    table.offsets.push_back(static_cast<uint32_t>(base + n));
-    clear();
-  }
-  static constexpr size_t kMaxInline = 32;
-};
 
 // Adjacency straight from the faces, without a corner table: corners are sorted by vertex, then
 // each vertex groups the half-edges between it and its higher-numbered neighbours into edges, so
@@ -392,6 +275,19 @@ void derive_child(const RefinedLevel& P, const Adj& pa, RefinedLevel& C, bool ed
   ca->veo[size_t(F) + E + V] = uint32_t(2 * NE);
 }
 
+// The non-manifold test OpenSubdiv's tagging uses: faces around the vertex do not form a single
+// fan (or a non-manifold edge touches it).
+bool cage_vertex_non_manifold(const Adj& adj, uint32_t v) {
+  const uint32_t nedges = adj.vertex_edge_count(v), nfaces = adj.vertex_face_count(v);
+  int nm_edges = 0, boundary = 0;
+  for (uint32_t k = adj.veo[v]; k < adj.veo[v + 1]; ++k) {
+    nm_edges += adj.edge_non_manifold[adj.ve[k]];
+    boundary += adj.edge_face_count(adj.ve[k]) == 1;
+  }
+  return nm_edges > 0 || adj.vertex_non_manifold[v] ||
+         (nfaces != nedges && (nfaces + 1 != nedges || boundary != 2));
+}
+
 // Level 0 sharpness: tags, then boundary, non-manifold and corner sharpening.
 void init_cage_level(const Mesh& cage, const SubdivOptions& o, const Adj& adj, RefinedLevel& L) {
   const LevelRef lr{L, adj};
@@ -409,8 +305,6 @@ void init_cage_level(const Mesh& cage, const SubdivOptions& o, const Adj& adj, R
   }
   L.face_hole.assign(cage.face_count(), 0);
   for (uint32_t f : cage.hole_faces) L.face_hole[f] = 1;
-  // The non-manifold test OpenSubdiv's tagging uses: faces around the vertex do not form a
-  // single fan (or a non-manifold edge touches it).
   auto count_edges = [&](uint32_t v, int& nm_edges, int& boundary) {
     for (uint32_t k = adj.veo[v]; k < adj.veo[v + 1]; ++k) {
       nm_edges += adj.edge_non_manifold[adj.ve[k]];
@@ -418,13 +312,7 @@ void init_cage_level(const Mesh& cage, const SubdivOptions& o, const Adj& adj, R
     }
   };
   std::vector<uint8_t> vertex_nm(nv, 0);
-  for (uint32_t v = 0; v < nv; ++v) {
-    const uint32_t nedges = adj.vertex_edge_count(v), nfaces = adj.vertex_face_count(v);
-    int nm_edges = 0, boundary = 0;
-    count_edges(v, nm_edges, boundary);
-    vertex_nm[v] = nm_edges > 0 || adj.vertex_non_manifold[v] ||
-                   (nfaces != nedges && (nfaces + 1 != nedges || boundary != 2));
-  }
+  for (uint32_t v = 0; v < nv; ++v) vertex_nm[v] = cage_vertex_non_manifold(adj, v);
   // Boundary interpolation "none": faces at a boundary vertex whose boundary edges are not all
   // explicitly infinitely sharp are excluded, as holes (tested before boundaries are sharpened).
   if (o.boundary == BoundaryInterpolation::none) {
@@ -485,168 +373,6 @@ float half_sharpness(const SubdivOptions& o, const RefinedLevel& P, const Adj& p
   return half_sharpness_at(o, P, pa, e, P.edge_vertices[2 * e + j], pe, ce);
 }
 
-// The stencil of every child point, from the rules. One instance per thread: it owns scratch.
-class Rules {
- public:
-  Rules(const SubdivOptions& o, const RefinedLevel& P, const Adj& a, const Selection& sel)
-      : o_(o), P_(P), a_(a), l_{P, a}, sel_(sel) {}
-
-  // Appends the stencil of child point i (block numbering) to `out`.
-  void point(size_t i, StencilTable& out) {
-    compute(i);
-    acc_.emit(out);
-  }
-  // The stencil of child point i, kept until write(): returns its size.
-  size_t compute(size_t i) {
-    acc_.clear();
-    if (i < sel_.nf) {
-      face_point(sel_.face(uint32_t(i)), 1.0, acc_);
-    } else if (i < size_t(sel_.nf) + sel_.ne) {
-      edge_point(sel_.edge(uint32_t(i - sel_.nf)));
-    } else {
-      vertex_point(sel_.vertex(uint32_t(i - sel_.nf - sel_.ne)));
-    }
-    return acc_.n;
-  }
-  void write(uint32_t* indices, float* weights) const {
-    for (size_t k = 0; k < acc_.n; ++k)
-      indices[k] = acc_.idx[k], weights[k] = static_cast<float>(acc_.w[k]);
-  }
-
- private:
-  void face_point(uint32_t f, double w, Terms& t) const {
-    const uint32_t b = P_.face_offsets[f], n = P_.face_offsets[f + 1] - b;
-    const double wi = w / double(n);
-    for (uint32_t c = b; c < b + n; ++c) t.add(P_.face_vertices[c], wi);
-  }
-
-  // Smooth edge mask, blended with the midpoint by `blend` (the sharp mask's weight).
-  void smooth_edge(uint32_t e, uint32_t a, uint32_t b, double blend) {
-    const uint32_t k0 = a_.eco[e], nfe = a_.eco[e + 1] - k0;
-    double vw = 0.25, fw = nfe == 2 ? 0.25 : 0.5 / nfe;
-    if (nfe == 2) {
-      const uint32_t ca = a_.ec[k0], cb = a_.ec[k0 + 1];
-      const uint32_t fa = a_.face_of(ca), fb = a_.face_of(cb);
-      // Refined levels are all quads: no face sizes to read.
-      const bool ta = !a_.quads && l_.face_size(fa) == 3, tb = !a_.quads && l_.face_size(fb) == 3;
-      if (o_.smooth_triangles && (ta || tb)) {
-        const double w0 = ta ? 0.470 : 0.25, w1 = tb ? 0.470 : 0.25;
-        fw = 0.5 * (double(float(w0)) + double(float(w1)));
-        vw = 0.5 * (1.0 - 2.0 * fw);
-      } else if (blend == 0.0 && (a_.quads || (l_.face_size(fa) == 4 && l_.face_size(fb) == 4))) {
-        // Two quads: 3/8 on the ends, 1/16 on the far vertices of each face.
-        acc_.add(a, 0.375), acc_.add(b, 0.375);
-        for (uint32_t c : {ca, cb}) {
-          const uint32_t n2 = l_.opposite_in_quad(c);
-          acc_.add(P_.face_vertices[n2], 0.0625);
-          acc_.add(P_.face_vertices[l_.prev(c)], 0.0625);
-        }
-        return;
-      }
-    }
-    acc_.add(a, blend * 0.5 + (1.0 - blend) * vw);
-    acc_.add(b, blend * 0.5 + (1.0 - blend) * vw);
-    for (uint32_t i = 0; i < nfe; ++i)
-      face_point(a_.face_of(a_.ec[k0 + i]), fw * (1.0 - blend), acc_);
-  }
-
-  float child_half_sharpness(uint32_t e, uint32_t v) {
-    return half_sharpness_at(o_, P_, a_, e, v, pe_, ce_);
-  }
-
-  void edge_point(uint32_t e) {
-    const uint32_t a = P_.edge_vertices[2 * size_t(e)], b = P_.edge_vertices[2 * size_t(e) + 1];
-    const float s = P_.edge_sharpness[e];
-    if (!sharp(s)) return smooth_edge(e, a, b, 0.0);
-    // The child rule of the edge point: its two halves' decayed sharpness.
-    const int sharp_halves =
-        int(sharp(child_half_sharpness(e, a))) + int(sharp(child_half_sharpness(e, b)));
-    if (vertex_rule(0.0f, sharp_halves) == kCrease) {
-      acc_.add(a, 0.5), acc_.add(b, 0.5);
-    } else {
-      smooth_edge(e, a, b, double(s));
-    }
-  }
-
-  void smooth_vertex(uint32_t v, Terms& m) const {
-    const uint32_t k0 = a_.veo[v], n = a_.veo[v + 1] - k0;
-    const uint32_t s0 = a_.vco[v], nfaces = a_.vco[v + 1] - s0;
-    if (nfaces != n)
-      throw InputError(fmt::format(
-          "vertex {} needs the smooth rule but is on a boundary or non-manifold (internal "
-          "tagging error)",
-          v));
-    const double dn = n, w = 1.0 / (dn * dn);
-    bool quads = a_.quads;
-    if (!quads) {
-      quads = true;
-      for (uint32_t i = 0; i < nfaces && quads; ++i)
-        quads = l_.face_size(a_.face_of(a_.vc[s0 + i])) == 4;
-    }
-    if (quads) {
-      // Every face a quad: v, the edge neighbours and the face diagonals, merged in closed form.
-      m.add(v, (dn - 2.0) / dn + 0.25 / dn);
-      for (uint32_t k = 0; k < n; ++k) m.add(l_.other_end(a_.ve[k0 + k], v), 1.5 * w);
-      for (uint32_t i = 0; i < nfaces; ++i)
-        m.add(P_.face_vertices[l_.opposite_in_quad(a_.vc[s0 + i])], 0.25 * w);
-      return;
-    }
-    m.add(v, (dn - 2.0) / dn);
-    for (uint32_t k = 0; k < n; ++k) m.add(l_.other_end(a_.ve[k0 + k], v), w);
-    for (uint32_t i = 0; i < nfaces; ++i) face_point(a_.face_of(a_.vc[s0 + i]), w, m);
-  }
-
-  void sharp_vertex(uint32_t v, Rule r, const float* es, Terms& m) const {
-    if (r != kCrease) {
-      m.add(v, 1.0);
-      return;
-    }
-    const uint32_t k0 = a_.veo[v], n = a_.veo[v + 1] - k0;
-    m.add(v, 0.75);
-    for (uint32_t k = 0; k < n; ++k)
-      if (sharp(es[k])) m.add(l_.other_end(a_.ve[k0 + k], v), 0.125);
-  }
-
-  void vertex_point(uint32_t v) {
-    const uint32_t k0 = a_.veo[v], n = a_.veo[v + 1] - k0;
-    if (n == 0) {  // on no face: stays where it is (its ring is empty)
-      acc_.add(v, 1.0);
-      return;
-    }
-    const float pv = P_.vertex_sharpness[v];
-    int sharp_edges = 0;
-    for (uint32_t k = 0; k < n; ++k) sharp_edges += sharp(P_.edge_sharpness[a_.ve[k0 + k]]);
-    const Rule prule = vertex_rule(pv, sharp_edges);
-    if (prule == kSmooth || prule == kDart) return smooth_vertex(v, acc_);
-    const float cv = decrement(pv);
-    pe_.resize(n), ce_.resize(n);
-    for (uint32_t k = 0; k < n; ++k) pe_[k] = P_.edge_sharpness[a_.ve[k0 + k]];
-    sharp_vertex(v, prule, pe_.data(), acc_);
-    child_edge_sharpness(o_, pe_.data(), int(n), ce_.data());
-    int child_sharp = 0;
-    for (uint32_t k = 0; k < n; ++k) child_sharp += sharp(ce_[k]);
-    const Rule crule = vertex_rule(cv, child_sharp);
-    if (crule == prule) return;
-    cmask_.clear();
-    if (crule == kSmooth || crule == kDart) {
-      smooth_vertex(v, cmask_);
-    } else {
-      sharp_vertex(v, crule, ce_.data(), cmask_);
-    }
-    const double pw = fractional_weight(o_, pv, cv, pe_.data(), ce_.data(), int(n));
-    acc_.scale(pw);
-    acc_.append(cmask_, 1.0 - pw);
-  }
-
-  const SubdivOptions& o_;
-  const RefinedLevel& P_;
-  const Adj& a_;
-  LevelRef l_;
-  const Selection& sel_;
-  Terms acc_, cmask_;
-  std::vector<float> pe_, ce_;
-};
-
 constexpr size_t kStencilChunk = 1 << 14;
 
 // Calls body(first point, table) for consecutive chunks of kStencilChunk child points, in
@@ -660,7 +386,7 @@ void for_stencil_chunks(const SubdivOptions& o, const RefinedLevel& P, const Adj
   // touches no fresh pages.
   tbb::enumerable_thread_specific<StencilTable> scratch;
   auto run = [&](size_t c) {
-    Rules rules(o, P, a, sel);
+    VertexRules rules(o, P, a, sel);
     StencilTable& t = scratch.local();
     const size_t b = c * chunk, e = std::min(n, b + chunk);
     t.offsets.clear();
@@ -716,8 +442,9 @@ StencilTable build_stencils(const SubdivOptions& o, const RefinedLevel& P, const
   StencilTable out;
   // Writes the computed row's k indices to `indices` and its weights to `pool` (through
   // `shared`, `row` holding them first); returns where they start in the pool.
-  auto write_row = [](const Rules& rules, size_t k, uint32_t* indices, std::vector<float>& row,
-                      detail::SharedWeights& shared, std::vector<float>& pool) {
+  auto write_row = [](const VertexRules& rules, size_t k, uint32_t* indices,
+                      std::vector<float>& row, detail::SharedWeights& shared,
+                      std::vector<float>& pool) {
     if (row.size() < k) row.resize(std::max(k, size_t(64)));
     rules.write(indices, row.data());
     return shared.add(pool, row.data(), uint32_t(k));
@@ -730,7 +457,7 @@ StencilTable build_stencils(const SubdivOptions& o, const RefinedLevel& P, const
     out.indices.reserve(entry_bound(P, a, sel, keep));
     constexpr size_t kStep = 4096;
     size_t used = 0;
-    Rules rules(o, P, a, sel);
+    VertexRules rules(o, P, a, sel);
     detail::SharedWeights shared;
     std::vector<float> row;
     for (size_t i = 0; i < n; ++i) {
@@ -759,7 +486,7 @@ StencilTable build_stencils(const SubdivOptions& o, const RefinedLevel& P, const
   std::vector<uint32_t> sizes;
   refill(sizes, n, 0u);
   parallel_range(n, kStencilChunk, [&](size_t b, size_t e) {
-    Rules rules(o, P, a, sel);
+    VertexRules rules(o, P, a, sel);
     for (size_t i = b; i < e; ++i) sizes[i] = keep && !keep[i] ? 0 : uint32_t(rules.compute(i));
   });
   size_t total = 0;
@@ -775,7 +502,7 @@ StencilTable build_stencils(const SubdivOptions& o, const RefinedLevel& P, const
   const size_t chunks = (n + kStencilChunk - 1) / kStencilChunk;
   std::vector<std::vector<float>> pools(chunks);
   tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
-    Rules rules(o, P, a, sel);
+    VertexRules rules(o, P, a, sel);
     detail::SharedWeights shared;
     std::vector<float> row;
     for (size_t i = c * kStencilChunk, e = std::min(n, i + kStencilChunk); i < e; ++i) {
@@ -842,6 +569,8 @@ SubdivOptions subdiv_options(const Mesh& mesh) {
   if (mesh.tags.boundary != BoundaryInterpolation::unset) o.boundary = mesh.tags.boundary;
   if (mesh.tags.crease_method != CreaseMethod::unset) o.crease_method = mesh.tags.crease_method;
   o.smooth_triangles = mesh.tags.smooth_triangles;
+  if (mesh.tags.fvar_boundary >= 0 && mesh.tags.fvar_boundary <= 5)
+    o.face_varying = static_cast<FVarInterpolation>(mesh.tags.fvar_boundary);
   return o;
 }
 
@@ -849,7 +578,8 @@ std::vector<float> UniformRefinement::positions(const Mesh& cage, int level) con
   return apply_chain(stencils, cage, level);
 }
 
-UniformRefinement refine_uniform(const Mesh& cage, int depth, const SubdivOptions& options) {
+UniformRefinement refine_uniform(const Mesh& cage, int depth, const SubdivOptions& options,
+                                 std::span<const FaceVaryingInput> face_varying) {
   if (depth < 0 || depth > 8)
     throw InputError(fmt::format("refinement depth {} out of range (0-8)", depth));
   UniformRefinement r;
@@ -857,18 +587,37 @@ UniformRefinement refine_uniform(const Mesh& cage, int depth, const SubdivOption
   r.levels.resize(size_t(depth) + 1);
   r.stencils.resize(size_t(depth));
   Adj a = cage_level(cage, options, r.levels[0]);
+  std::vector<FVarState> fvar;
+  for (const FaceVaryingInput& in : face_varying) {
+    fvar.push_back(fvar_cage_state(options, r.levels[0], a, in.corner_values, in.value_count));
+    FaceVaryingLevels& out = r.face_varying.emplace_back();
+    out.corner_values.emplace_back(in.corner_values.begin(), in.corner_values.end());
+    out.value_counts.push_back(in.value_count);
+  }
   for (size_t k = 0; k < size_t(depth); ++k) {
     const RefinedLevel& P = r.levels[k];
     RefinedLevel& C = r.levels[k + 1];
     const Selection all = Selection::everything(P);
     r.stencils[k] = build_stencils(options, P, a, all);
+    for (size_t i = 0; i < fvar.size(); ++i) {
+      FVarState child;
+      FaceVaryingLevels& out = r.face_varying[i];
+      out.stencils.push_back(fvar_refine(options, P, a, fvar[i], child));
+      out.value_counts.push_back(child.value_count());
+      out.corner_values.push_back(child.corner_value);
+      fvar[i] = std::move(child);
+    }
     Adj ca;
-    const bool last = k + 1 == size_t(depth);
+    // The last level's adjacency only for face-varying limits.
+    const bool last = k + 1 == size_t(depth) && fvar.empty();
     derive_child(P, a, C, true, last ? nullptr : &ca);
     child_vertex_sharpness(P, all, C);
     derived_edge_sharpness(options, P, a, C);
     a = std::move(ca);
   }
+  const bool quads = r.levels.back().face_offsets.back() == 4 * r.levels.back().face_count();
+  for (size_t i = 0; i < fvar.size() && quads; ++i)
+    r.face_varying[i].limit = fvar_limit(options, r.levels.back(), a, fvar[i]);
   return r;
 }
 

@@ -79,8 +79,10 @@ inline osd::Sdc::Options osd_options(const SubdivOptions& options) {
                           : osd::Sdc::Options::CREASE_UNIFORM);
   o.SetTriangleSubdivision(options.smooth_triangles ? osd::Sdc::Options::TRI_SUB_SMOOTH
                                                     : osd::Sdc::Options::TRI_SUB_CATMARK);
-  // Positions only: face-varying rules cannot change the vertex results.
-  o.SetFVarLinearInterpolation(osd::Sdc::Options::FVAR_LINEAR_ALL);
+  // The enum values are OpenSubdiv's FVarLinearInterpolation's (face-varying rules never change
+  // the vertex results).
+  o.SetFVarLinearInterpolation(
+      static_cast<osd::Sdc::Options::FVarLinearInterpolation>(options.face_varying));
   return o;
 }
 
@@ -96,10 +98,11 @@ struct OsdRefinement {
   std::vector<OsdLevel> levels;                        // levels[0] is the cage
 };
 
-/// An unrefined OpenSubdiv refiner for `cage`. Throws std::runtime_error when OpenSubdiv
-/// rejects the topology.
+/// An unrefined OpenSubdiv refiner for `cage`, with the cage's UVs as face-varying channel 0
+/// when `with_uvs`. Throws std::runtime_error when OpenSubdiv rejects the topology.
 inline std::unique_ptr<osd::Far::TopologyRefiner> osd_refiner(const Mesh& cage,
-                                                              const SubdivOptions& options) {
+                                                              const SubdivOptions& options,
+                                                              bool with_uvs = false) {
   using Index = osd::Far::Index;
   const size_t nf = cage.face_count();
   std::vector<int> verts_per_face(nf);
@@ -122,6 +125,14 @@ inline std::unique_ptr<osd::Far::TopologyRefiner> osd_refiner(const Mesh& cage,
   desc.cornerWeights = cage.corner_sharpness.data();
   desc.numHoles = static_cast<int>(holes.size());
   desc.holeIndices = holes.data();
+  const std::vector<Index> uv_indices(cage.uv_indices.begin(), cage.uv_indices.end());
+  osd::Far::TopologyDescriptor::FVarChannel uv_channel;
+  if (with_uvs) {
+    uv_channel.numValues = static_cast<int>(cage.uvs.size() / 2);
+    uv_channel.valueIndices = uv_indices.data();
+    desc.numFVarChannels = 1;
+    desc.fvarChannels = &uv_channel;
+  }
 
   using Factory = osd::Far::TopologyRefinerFactory<osd::Far::TopologyDescriptor>;
   Factory::Options factory_options(osd::Sdc::SCHEME_CATMARK, osd_options(options));
@@ -181,6 +192,56 @@ inline OsdLimit osd_limit(const OsdRefinement& r) {
     out.tangent1.insert(out.tangent1.end(), {t1[v].x, t1[v].y, t1[v].z});
     out.tangent2.insert(out.tangent2.end(), {t2[v].x, t2[v].y, t2[v].z});
   }
+  return out;
+}
+
+/// The primvar type for UVs.
+struct OsdUv {
+  double u = 0, v = 0;
+  void Clear(void* = nullptr) { u = v = 0; }
+  void AddWithWeight(const OsdUv& p, float w) {
+    u += w * p.u;
+    v += w * p.v;
+  }
+};
+
+/// OpenSubdiv's face-varying refinement of the cage's UVs: per level, the vertex positions (3
+/// doubles per vertex), the UV values (InterpolateFaceVarying) and the topology, which gives
+/// each face's value indices (GetFaceFVarValues(f, 0)).
+struct OsdFaceVarying {
+  std::unique_ptr<osd::Far::TopologyRefiner> refiner;
+  std::vector<std::vector<double>> positions;
+  std::vector<std::vector<OsdUv>> uvs;
+  std::vector<OsdUv> limit;  ///< LimitFaceVarying of the last level's values
+};
+
+inline OsdFaceVarying osd_refine_uvs(const Mesh& cage, int depth, const SubdivOptions& options) {
+  OsdFaceVarying out;
+  out.refiner = osd_refiner(cage, options, true);
+  osd::Far::TopologyRefiner::UniformOptions uniform(depth);
+  uniform.fullTopologyInLastLevel = true;
+  out.refiner->RefineUniform(uniform);
+  const osd::Far::PrimvarRefiner primvar(*out.refiner);
+  std::vector<OsdPoint> p(cage.vertex_count());
+  for (size_t v = 0; v < cage.vertex_count(); ++v)
+    p[v] = {cage.positions[3 * v], cage.positions[3 * v + 1], cage.positions[3 * v + 2]};
+  std::vector<OsdUv> uv(cage.uvs.size() / 2);
+  for (size_t i = 0; i < uv.size(); ++i) uv[i] = {cage.uvs[2 * i], cage.uvs[2 * i + 1]};
+  for (int k = 0;; ++k) {
+    std::vector<double>& pos = out.positions.emplace_back();
+    for (const OsdPoint& q : p) pos.insert(pos.end(), {q.x, q.y, q.z});
+    out.uvs.push_back(uv);
+    if (k == depth) break;
+    const osd::Far::TopologyLevel& next = out.refiner->GetLevel(k + 1);
+    std::vector<OsdPoint> p2(static_cast<size_t>(next.GetNumVertices()));
+    std::vector<OsdUv> uv2(static_cast<size_t>(next.GetNumFVarValues(0)));
+    primvar.Interpolate(k + 1, p, p2);
+    primvar.InterpolateFaceVarying(k + 1, uv, uv2, 0);
+    p.swap(p2);
+    uv.swap(uv2);
+  }
+  out.limit.resize(uv.size());
+  if (depth > 0) primvar.LimitFaceVarying(uv, out.limit, 0);
   return out;
 }
 

@@ -20,11 +20,23 @@
 
 namespace limn {
 
+/// How face-varying data (UVs) is interpolated, as OpenSubdiv's Sdc::Options::
+/// FVarLinearInterpolation; the numbers are the OBJ tag `t facevaryinginterpolateboundary N`'s.
+enum class FVarInterpolation : int8_t {
+  none = 0,           ///< smooth everywhere: seams are smooth boundary curves on each side
+  corners_only = 1,   ///< values whose span around their vertex is one face stay put
+  corners_plus1 = 2,  ///< and junctions of three or more values (OpenSubdiv's "edge corner")
+  corners_plus2 = 3,  ///< and seams ending inside the surface (darts), concave corners
+  boundaries = 4,     ///< every seam and mesh boundary linear, interiors smooth
+  all = 5             ///< bilinear everywhere (OpenSubdiv's default)
+};
+
 /// Scheme options (OpenSubdiv's Sdc::Options for Catmull-Clark).
 struct SubdivOptions {
   BoundaryInterpolation boundary = BoundaryInterpolation::edge_and_corner;
   CreaseMethod crease_method = CreaseMethod::uniform;
   bool smooth_triangles = false;  ///< Sdc TRI_SUB_SMOOTH instead of TRI_SUB_CATMARK.
+  FVarInterpolation face_varying = FVarInterpolation::all;
 };
 
 /// Options from a mesh's OpenSubdiv tags; unset tags take the defaults above.
@@ -77,10 +89,34 @@ struct RefinedLevel {
 /// per level-(k-1) face), the edge-point table (one per edge), the vertex-point table (one per
 /// vertex); within a block the rules (smooth, crease, corner, blended) are mixed, each stencil
 /// carrying its own weights.
+/// One face-varying channel (UVs, or any per-corner data) of a cage: a value index per corner
+/// (the order of Mesh::face_vertices) into `value_count` values. Corners of a vertex that share
+/// an index are continuous there; a vertex whose corners hold several indices is on a seam.
+struct FaceVaryingInput {
+  std::span<const uint32_t> corner_values;
+  size_t value_count = 0;
+};
+
+/// A face-varying channel through the levels of a refinement (OpenSubdiv's Far face-varying
+/// levels and PrimvarRefiner::InterpolateFaceVarying): corner_values[k] holds a value index per
+/// corner of level k (level 0: the input's), stencils[k-1] computes level k's values from level
+/// k-1's (level 0's are the caller's, indexed as the input indexes them).
+struct FaceVaryingLevels {
+  std::vector<std::vector<uint32_t>> corner_values;
+  std::vector<size_t> value_counts;
+  std::vector<StencilTable> stencils;
+  /// Limit values at the last level (PrimvarRefiner::LimitFaceVarying): one row per value of
+  /// the last level, over those values. Empty when the last level is not all quads (depth 0).
+  StencilTable limit;
+  /// Values (`channels` floats each) of level `level`, from the cage's values. O(entries).
+  std::vector<float> values(const float* cage_values, int channels, int level) const;
+};
+
 struct UniformRefinement {
   SubdivOptions options;
   std::vector<RefinedLevel> levels;
   std::vector<StencilTable> stencils;
+  std::vector<FaceVaryingLevels> face_varying;  ///< one per channel given to refine_uniform
   /// Positions (3 floats per point) of level `level`, by applying the stencils to the cage's.
   std::vector<float> positions(const Mesh& cage, int level) const;
 };
@@ -230,9 +266,12 @@ struct SubdivideStats {
 Mesh subdivide_uniform(const Mesh& cage, int depth, const SubdivOptions& options,
                        SubdivideStats* stats = nullptr);
 
-/// Refines `cage` uniformly `depth` times (0 <= depth <= 8). Throws InputError for cages limn
-/// cannot subdivide (see the note on non-manifold input in the implementation). Memory and time
-/// grow 4x per level.
-UniformRefinement refine_uniform(const Mesh& cage, int depth, const SubdivOptions& options);
+/// Refines `cage` uniformly `depth` times (0 <= depth <= 8), and each face-varying channel with
+/// it under options.face_varying (seams, corners and creases of the channel's own topology as
+/// OpenSubdiv refines them). Throws InputError for cages limn cannot subdivide (see the note on
+/// non-manifold input in the implementation) and for channels with the wrong corner count or an
+/// index past value_count. Memory and time grow 4x per level.
+UniformRefinement refine_uniform(const Mesh& cage, int depth, const SubdivOptions& options,
+                                 std::span<const FaceVaryingInput> face_varying = {});
 
 }  // namespace limn

@@ -1,0 +1,292 @@
+// Face-varying (UV) refinement against OpenSubdiv 3.5 (Far::PrimvarRefiner::InterpolateFace-
+// Varying and LimitFaceVarying) on every shared cage with UVs, in each of the six
+// FVarLinearInterpolation modes, and on cages built here with seams on purpose (a cube with an
+// island per side, a torus cut by two seams, a seam that ends inside the surface).
+//
+// Corners are matched by position, not by index order: each level's vertices are paired with
+// OpenSubdiv's by their refined positions, faces by their vertex sets, corners by their vertex.
+// Then every corner's UV must agree to 1e-6.
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <set>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "limn/io/mesh_io.hpp"
+#include "limn/mesh/shapes.hpp"
+#include "limn/subdiv/refine.hpp"
+#include "osd_oracle.hpp"
+
+namespace limn {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr double kTolerance = 1e-6;
+
+// limn vertex -> OpenSubdiv vertex of the same position (nearest within `tol`), or -1.
+std::vector<int> match_vertices(const std::vector<float>& mine, const std::vector<double>& theirs,
+                                double tol) {
+  const size_t n = theirs.size() / 3;
+  std::vector<int> order(n);
+  for (size_t i = 0; i < n; ++i) order[i] = int(i);
+  std::sort(order.begin(), order.end(),
+            [&](int a, int b) { return theirs[3 * size_t(a)] < theirs[3 * size_t(b)]; });
+  std::vector<double> xs(n);
+  for (size_t i = 0; i < n; ++i) xs[i] = theirs[3 * size_t(order[i])];
+  std::vector<int> out(mine.size() / 3, -1);
+  for (size_t v = 0; v < out.size(); ++v) {
+    const double x = mine[3 * v], y = mine[3 * v + 1], z = mine[3 * v + 2];
+    double best = tol;
+    auto it = std::lower_bound(xs.begin(), xs.end(), x - tol);
+    for (; it != xs.end() && *it <= x + tol; ++it) {
+      const size_t j = size_t(order[size_t(it - xs.begin())]);
+      const double d = std::hypot(theirs[3 * j] - x, theirs[3 * j + 1] - y, theirs[3 * j + 2] - z);
+      if (d <= best) best = d, out[v] = int(j);
+    }
+  }
+  return out;
+}
+
+struct Result {
+  size_t corners = 0, unmatched = 0;
+  double worst = 0;
+  std::string where;
+};
+
+// Compares limn's level-k UVs per corner with OpenSubdiv's.
+// `uv` and `theirs` are the level's values (or their limits) on each side.
+Result compare_level(const Mesh& cage, const UniformRefinement& r, const test::OsdFaceVarying& o,
+                     size_t k, const std::vector<float>& uv,
+                     const std::vector<test::OsdUv>& theirs) {
+  Result res;
+  const RefinedLevel& L = r.levels[k];
+  const FaceVaryingLevels& fl = r.face_varying[0];
+  const std::vector<float> pos = r.positions(cage, int(k));
+  const auto& T = o.refiner->GetLevel(int(k));
+  Box box = bounding_box(cage);
+  const double tol = 1e-5 * std::max(1.0f, box.diagonal());
+  const std::vector<int> vmap = match_vertices(pos, o.positions[k], tol);
+  // OpenSubdiv faces by their sorted vertex sets.
+  std::map<std::vector<int>, int> faces;
+  for (int f = 0; f < T.GetNumFaces(); ++f) {
+    const auto fv = T.GetFaceVertices(f);
+    std::vector<int> key(fv.begin(), fv.end());
+    std::sort(key.begin(), key.end());
+    faces.emplace(key, f);
+  }
+  for (size_t f = 0; f < L.face_count(); ++f) {
+    const uint32_t b = L.face_offsets[f], n = L.face_offsets[f + 1] - b;
+    std::vector<int> key;
+    for (uint32_t i = 0; i < n; ++i) key.push_back(vmap[L.face_vertices[b + i]]);
+    std::sort(key.begin(), key.end());
+    const auto it = faces.find(key);
+    res.corners += n;
+    if (it == faces.end() || key.front() < 0) {
+      res.unmatched += n;
+      continue;
+    }
+    const auto fv = T.GetFaceVertices(it->second);
+    const auto fvals = T.GetFaceFVarValues(it->second, 0);
+    for (uint32_t i = 0; i < n; ++i) {
+      const int ov = vmap[L.face_vertices[b + i]];
+      int j = 0;
+      while (j < fv.size() && fv[j] != ov) ++j;
+      const size_t mine = fl.corner_values[k][b + i];
+      const test::OsdUv& t = theirs[size_t(fvals[j])];
+      const double d = std::max(std::fabs(uv[2 * mine] - t.u), std::fabs(uv[2 * mine + 1] - t.v));
+      if (d > res.worst) {
+        res.worst = d;
+        res.where = fmt::format(
+            "level {} face {} corner {}: limn ({:.7g}, {:.7g}) osd ({:.7g}, "
+            "{:.7g})",
+            k, f, i, uv[2 * mine], uv[2 * mine + 1], t.u, t.v);
+      }
+    }
+  }
+  return res;
+}
+
+void check_cage(const Mesh& cage, int depth, FVarInterpolation mode) {
+  SubdivOptions opt = subdiv_options(cage);
+  opt.face_varying = mode;
+  const FaceVaryingInput in{cage.uv_indices, cage.uvs.size() / 2};
+  const UniformRefinement r = refine_uniform(cage, depth, opt, {&in, 1});
+  const test::OsdFaceVarying o = test::osd_refine_uvs(cage, depth, opt);
+  ASSERT_EQ(r.face_varying.size(), 1u);
+  for (size_t k = 0; k <= size_t(depth); ++k) {
+    EXPECT_EQ(r.face_varying[0].value_counts[k],
+              size_t(o.refiner->GetLevel(int(k)).GetNumFVarValues(0)))
+        << "value count, level " << k;
+    const std::vector<float> uv = r.face_varying[0].values(cage.uvs.data(), 2, int(k));
+    const Result res = compare_level(cage, r, o, k, uv, o.uvs[k]);
+    EXPECT_EQ(res.unmatched, 0u) << "corners not matched by position at level " << k;
+    EXPECT_LE(res.worst, kTolerance) << res.where;
+  }
+  // Limits of the last level's values.
+  const FaceVaryingLevels& fl = r.face_varying[0];
+  ASSERT_EQ(fl.limit.size(), fl.value_counts.back());
+  const std::vector<float> last = fl.values(cage.uvs.data(), 2, depth);
+  std::vector<float> limit(last.size());
+  apply_stencils(fl.limit, last.data(), limit.data(), 2);
+  const Result res = compare_level(cage, r, o, size_t(depth), limit, o.limit);
+  EXPECT_LE(res.worst, kTolerance) << "limit: " << res.where;
+}
+
+std::vector<fs::path> cages_with_uvs() {
+  std::vector<fs::path> out;
+  for (const fs::path& p : test::shared_cages(LIMN_SHARED_MODELS)) {
+    const Mesh m = read_mesh(p.string());
+    if (!m.uv_indices.empty()) out.push_back(p);
+  }
+  return out;
+}
+
+struct Case {
+  fs::path path;
+  int mode;
+};
+
+std::vector<Case> model_cases() {
+  std::vector<Case> out;
+  for (const fs::path& p : cages_with_uvs())
+    for (int m = 0; m <= 5; ++m) out.push_back({p, m});
+  return out;
+}
+
+class FVarModel : public ::testing::TestWithParam<Case> {};
+
+TEST_P(FVarModel, MatchesOpenSubdiv) {
+  const Mesh cage = read_mesh(GetParam().path.string());
+  const int depth = cage.face_count() > 500 ? 2 : 3;
+  check_cage(cage, depth, static_cast<FVarInterpolation>(GetParam().mode));
+}
+
+INSTANTIATE_TEST_SUITE_P(Models, FVarModel, ::testing::ValuesIn(model_cases()),
+                         [](const ::testing::TestParamInfo<Case>& p) {
+                           std::string name = p.param.path.stem().string() + "_mode" +
+                                              std::to_string(p.param.mode);
+                           for (char& c : name)
+                             if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+                           return name;
+                         });
+GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(FVarModel);
+
+TEST(FVarModels, SharedCagesWithUvsPresent) {
+  if (!fs::is_directory(fs::path(LIMN_SHARED_MODELS) / "osd")) GTEST_SKIP() << "no shared models";
+  EXPECT_GE(cages_with_uvs().size(), 20u);
+}
+
+// A cube whose six sides are separate UV islands (24 values, a 3 x 2 atlas).
+Mesh cube_islands() {
+  Mesh m = make_cube();
+  for (size_t f = 0; f < m.face_count(); ++f) {
+    const float u0 = float(f % 3) / 3.0f, v0 = float(f / 3) / 2.0f;
+    const float corner[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+    for (uint32_t i = 0; i < m.face_size(f); ++i) {
+      m.uv_indices.push_back(uint32_t(m.uvs.size() / 2));
+      m.uvs.push_back(u0 + (0.05f + 0.9f * corner[i][0]) / 3.0f);
+      m.uvs.push_back(v0 + (0.05f + 0.9f * corner[i][1]) / 2.0f);
+    }
+  }
+  return m;
+}
+
+// The procedural torus (with extraordinary vertices) mapped by its two angles: cut by a seam
+// around each circle, the two seams crossing at one vertex with four values.
+Mesh torus_seams() {
+  const int valences[] = {3, 5, 6};
+  Mesh m = make_torus(24, 12, valences);
+  constexpr double kTwoPi = 6.283185307179586;
+  auto angles = [&](uint32_t v, double out[2]) {
+    const double x = m.positions[3 * v], y = m.positions[3 * v + 1], z = m.positions[3 * v + 2];
+    out[0] = std::atan2(y, x) / kTwoPi + 0.5;
+    out[1] = std::atan2(z, std::hypot(x, y) - 1.0) / kTwoPi + 0.5;
+  };
+  std::map<std::array<uint32_t, 3>, uint32_t> ids;  // (vertex, wrapped u, wrapped v) -> value
+  for (size_t f = 0; f < m.face_count(); ++f) {
+    const auto fv = m.face(f);
+    std::vector<std::array<double, 2>> a(fv.size());
+    double lo[2] = {1, 1}, hi[2] = {0, 0};
+    for (size_t i = 0; i < fv.size(); ++i) {
+      angles(fv[i], a[i].data());
+      for (int k = 0; k < 2; ++k)
+        lo[k] = std::min(lo[k], a[i][k]), hi[k] = std::max(hi[k], a[i][k]);
+    }
+    for (size_t i = 0; i < fv.size(); ++i) {
+      std::array<uint32_t, 3> key{fv[i], 0, 0};
+      for (int k = 0; k < 2; ++k)
+        if (hi[k] - lo[k] > 0.5 && a[i][k] < 0.5) a[i][k] += 1.0, key[size_t(k) + 1] = 1;
+      const auto [it, added] = ids.emplace(key, uint32_t(m.uvs.size() / 2));
+      if (added) m.uvs.insert(m.uvs.end(), {float(a[i][0]), float(a[i][1])});
+      m.uv_indices.push_back(it->second);
+    }
+  }
+  return m;
+}
+
+// A 4 x 4 grid of quads with a seam from the boundary into the middle, where it ends (a dart):
+// faces above the slit see its vertices at other UVs than the faces below.
+Mesh dart_grid() {
+  Mesh m;
+  for (int y = 0; y <= 4; ++y)
+    for (int x = 0; x <= 4; ++x) m.add_vertex(float(x), float(y), 0.1f * float(x * y % 3));
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 4; ++x) {
+      const uint32_t v = uint32_t(5 * y + x);
+      m.add_face({v, v + 1, v + 6, v + 5});
+    }
+  for (uint32_t v = 0; v < 25; ++v)
+    m.uvs.insert(m.uvs.end(), {float(v % 5) / 4.0f, float(v / 5) / 4.0f});
+  // Slit vertices (0,2) and (1,2) get second values for the faces above; (2,2) is the tip.
+  const uint32_t slit[2] = {10, 11};
+  for (uint32_t v : slit) m.uvs.insert(m.uvs.end(), {float(v % 5) / 4.0f, 0.5f + 0.08f});
+  for (size_t f = 0; f < m.face_count(); ++f)
+    for (uint32_t v : m.face(f)) {
+      const bool above = f >= 8;  // faces of rows 2 and 3
+      m.uv_indices.push_back(above && v == slit[0] ? 25 : above && v == slit[1] ? 26 : v);
+    }
+  m.tags.boundary = BoundaryInterpolation::edge_only;
+  return m;
+}
+
+struct Built {
+  const char* name;
+  Mesh (*make)();
+};
+
+class FVarBuilt : public ::testing::TestWithParam<std::tuple<int, int>> {};
+
+TEST_P(FVarBuilt, MatchesOpenSubdiv) {
+  static const Built built[] = {
+      {"cube_islands", cube_islands}, {"torus_seams", torus_seams}, {"dart_grid", dart_grid}};
+  const auto [which, mode] = GetParam();
+  SCOPED_TRACE(built[which].name);
+  const Mesh cage = built[which].make();
+  validate(cage);
+  check_cage(cage, 3, static_cast<FVarInterpolation>(mode));
+}
+
+INSTANTIATE_TEST_SUITE_P(Seams, FVarBuilt,
+                         ::testing::Combine(::testing::Range(0, 3), ::testing::Range(0, 6)));
+
+// The torus's seams really are seams: its cage has more UV values than vertices, and a
+// junction where four meet.
+TEST(FVarBuilt, TorusSeamsHaveAJunction) {
+  const Mesh m = torus_seams();
+  EXPECT_GT(m.uvs.size() / 2, m.vertex_count());
+  std::map<uint32_t, std::set<uint32_t>> values;
+  for (size_t c = 0; c < m.corner_count(); ++c) values[m.face_vertices[c]].insert(m.uv_indices[c]);
+  size_t four = 0;
+  for (const auto& [v, set] : values) four += set.size() == 4;
+  EXPECT_EQ(four, 1u);
+}
+
+}  // namespace
+}  // namespace limn
