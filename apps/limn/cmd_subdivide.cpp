@@ -44,7 +44,12 @@ void run_adaptive(const std::string& mesh, const std::string& out_path, const st
   to.depth_colors = a.depth_colors;
   const Mesh out = tessellate_patches(cage, table, points, to);
   timings["tessellate"] = sw.lap();
-  write_mesh(out, out_path);
+  // Face-varying patches are not built yet: the adaptive surface carries positions only.
+  std::vector<std::string> lost;
+  if (!cage.uv_indices.empty()) lost.emplace_back("uv");
+  if (!cage.colors.empty() && out.colors.empty()) lost.emplace_back("colors");
+  if (!cage.normal_indices.empty() && out.normal_indices.empty()) lost.emplace_back("normals");
+  const nlohmann::json dropped = write_output(out, out_path, lost);
   timings["write"] = sw.lap();
 
   // Histogram of the depth of the irregular vertices (the ones that need any).
@@ -95,6 +100,7 @@ void run_adaptive(const std::string& mesh, const std::string& out_path, const st
                                : nlohmann::json(a.tess)},
         {"output_vertices", out.vertex_count()},
         {"output_faces", out.face_count()},
+        {"dropped", dropped},
         {"timings_ms", timings}};
     fmt::print("{}\n", j.dump(2));
   } else {
@@ -178,7 +184,11 @@ void add_subdivide(CLI::App& app) {
       timings["stencils_and_apply"] = st.stencils_ms;
       timings["output"] = st.output_ms;
     } else {
-      const UniformRefinement r = refine_uniform(cage, o->uniform, options);
+      // UVs refined as face-varying data and pushed to their own limit.
+      const FaceVaryingInput uv_channel{cage.uv_indices, cage.uvs.size() / 2};
+      const bool uv = !cage.uv_indices.empty();
+      const UniformRefinement r =
+          refine_uniform(cage, o->uniform, options, {&uv_channel, uv ? 1u : 0u});
       timings["topology_refine_stencils"] = sw.lap();
       std::vector<float> pos = r.positions(cage, o->uniform);
       timings["apply"] = sw.lap();
@@ -190,12 +200,31 @@ void add_subdivide(CLI::App& app) {
       apply_stencils(ls.tangent2, pos.data(), t2.data(), 3);
       out.normals = normals_from_tangents(t1, t2);
       out.positions = std::move(p);
+      if (cage.colors.size() == 4 * cage.vertex_count()) {
+        std::vector<float> c = cage.colors, next;
+        for (const StencilTable& t : r.stencils) {
+          next.assign(4 * t.size(), 0.0f);
+          apply_stencils(t, c.data(), next.data(), 4);
+          c.swap(next);
+        }
+        out.colors.resize(c.size());
+        apply_stencils(ls.position, c.data(), out.colors.data(), 4);
+      }
+      std::vector<uint32_t> corner_uv;
+      if (uv) {
+        const FaceVaryingLevels& fl = r.face_varying[0];
+        const std::vector<float> last = fl.values(cage.uvs.data(), 2, o->uniform);
+        out.uvs.resize(last.size());
+        apply_stencils(fl.limit, last.data(), out.uvs.data(), 2);
+        corner_uv = fl.corner_values.back();
+      }
       timings["limit"] = sw.lap();
       // Holes are refined for their neighbours but make no surface.
       for (size_t f = 0; f < L.face_count(); ++f) {
         if (L.face_hole[f]) continue;
-        out.add_face(std::span<const uint32_t>(L.face_vertices.data() + L.face_offsets[f],
-                                               L.face_offsets[f + 1] - L.face_offsets[f]));
+        const uint32_t b = L.face_offsets[f], e = L.face_offsets[f + 1];
+        out.add_face(std::span<const uint32_t>(L.face_vertices.data() + b, e - b));
+        if (uv) out.uv_indices.insert(out.uv_indices.end(), &corner_uv[b], &corner_uv[b] + (e - b));
       }
       out.normal_indices = out.face_vertices;
       // Remaining sharpness travels as OpenSubdiv tags, so the result can be refined further.
@@ -221,7 +250,7 @@ void add_subdivide(CLI::App& app) {
       }
     }
     sw.lap();
-    write_mesh(out, o->out);
+    const nlohmann::json dropped = write_output(out, o->out);
     timings["write"] = sw.lap();
 
     if (o->json) {
@@ -232,6 +261,7 @@ void add_subdivide(CLI::App& app) {
                           {"levels", levels},
                           {"output_vertices", out.vertex_count()},
                           {"output_faces", out.face_count()},
+                          {"dropped", dropped},
                           {"timings_ms", timings}};
       fmt::print("{}\n", j.dump(2));
     } else {

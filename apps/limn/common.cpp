@@ -1,6 +1,9 @@
 #include "common.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <algorithm>
 
 #include <sstream>
 
@@ -12,6 +15,19 @@ MeshFormat parse_format_option(const std::string& value, const char* option) {
   if (f == MeshFormat::automatic)
     throw InputError(fmt::format("{}: unknown format '{}' (obj, ply, off, glb)", option, value));
   return f;
+}
+
+nlohmann::json write_output(const Mesh& mesh, const std::string& path,
+                            std::vector<std::string> lost, const WriteOptions& opt) {
+  MeshFormat format = opt.format;
+  if (format == MeshFormat::automatic) format = format_from_path(path);
+  for (std::string& d : dropped_attributes(mesh, format))
+    if (std::find(lost.begin(), lost.end(), d) == lost.end()) lost.push_back(std::move(d));
+  write_mesh(mesh, path, opt);
+  if (!lost.empty())
+    fmt::print(stderr, "limn: warning: {}: dropped {} (not carried to this output)\n", path,
+               fmt::join(lost, ", "));
+  return nlohmann::json(lost);
 }
 
 nlohmann::json stats_json(const MeshStats& s) {

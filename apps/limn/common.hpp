@@ -46,6 +46,13 @@ MeshFormat parse_format_option(const std::string& value, const char* option);
 /// "a,b,c,..." -> numbers; InputError "OPTION S: 'item' is not a number" for any other item.
 std::vector<float> parse_numbers(const std::string& s, const char* option);
 
+/// Writes `mesh` to `path` (atomically, format by extension or `opt`) and returns what was lost
+/// on the way as a JSON array of names: `lost` (what the command itself could not carry, e.g.
+/// "uv" through a step without UV support) followed by what the file format cannot store
+/// (dropped_attributes). When it is not empty, one warning line on stderr names them.
+nlohmann::json write_output(const Mesh& mesh, const std::string& path,
+                            std::vector<std::string> lost = {}, const WriteOptions& opt = {});
+
 nlohmann::json stats_json(const MeshStats& s);
 /// Human-readable multi-line summary of the stats.
 std::string stats_text(const MeshStats& s);

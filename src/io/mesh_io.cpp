@@ -77,6 +77,31 @@ Mesh read_mesh(const std::filesystem::path& path, MeshFormat format) {
   return read_mesh_memory(data, format, path.string());
 }
 
+std::vector<std::string> dropped_attributes(const Mesh& m, MeshFormat format) {
+  const bool geometry_only = format == MeshFormat::off;
+  const bool keeps_tags = format == MeshFormat::obj;
+  std::vector<std::string> out;
+  if (geometry_only && !m.uv_indices.empty()) out.emplace_back("uv");
+  if (geometry_only && !m.normal_indices.empty()) out.emplace_back("normals");
+  if (geometry_only && !m.colors.empty()) out.emplace_back("colors");
+  if (format == MeshFormat::obj) {
+    bool alpha = false;
+    for (size_t i = 3; i < m.colors.size() && !alpha; i += 4) alpha = m.colors[i] != 1.0f;
+    if (alpha) out.emplace_back("alpha");
+  }
+  if (!keeps_tags) {
+    if (!m.crease_sharpness.empty()) out.emplace_back("creases");
+    if (!m.corner_sharpness.empty()) out.emplace_back("corners");
+    if (!m.hole_faces.empty()) out.emplace_back("holes");
+    const SubdivTags none;
+    if (m.tags.boundary != none.boundary || m.tags.fvar_boundary != none.fvar_boundary ||
+        m.tags.crease_method != none.crease_method ||
+        m.tags.smooth_triangles != none.smooth_triangles)
+      out.emplace_back("tags");
+  }
+  return out;
+}
+
 std::string write_mesh_memory(const Mesh& mesh, MeshFormat format, bool ascii_ply) {
   std::string out;
   switch (format) {

@@ -621,6 +621,28 @@ UniformRefinement refine_uniform(const Mesh& cage, int depth, const SubdivOption
   return r;
 }
 
+namespace {
+
+// A face-varying channel subdivide_uniform carries to its output.
+struct Carried {
+  std::vector<float>* values_out;
+  std::vector<uint32_t>* indices;
+  std::vector<float> values;
+  FVarState state;
+  int width;
+};
+
+void normalize3(std::vector<float>& v) {
+  for (size_t i = 0; i + 2 < v.size(); i += 3) {
+    const double l =
+        std::sqrt(double(v[i]) * v[i] + double(v[i + 1]) * v[i + 1] + double(v[i + 2]) * v[i + 2]);
+    if (l > 0.0)
+      for (size_t k = 0; k < 3; ++k) v[i + k] = float(v[i + k] / l);
+  }
+}
+
+}  // namespace
+
 Mesh subdivide_uniform(const Mesh& cage, int depth, const SubdivOptions& options,
                        SubdivideStats* stats) {
   using clock = std::chrono::steady_clock;
@@ -634,27 +656,68 @@ Mesh subdivide_uniform(const Mesh& cage, int depth, const SubdivOptions& options
   st.topology_ms += ms_since(t0);
   Mesh out;
   out.tags = cage.tags;
+  // UVs and per-corner normals ride along as face-varying channels, colours as vertex data.
+  std::vector<Carried> carried;
+  if (!cage.uv_indices.empty()) carried.push_back({&out.uvs, &out.uv_indices, cage.uvs, {}, 2});
+  if (!cage.normal_indices.empty())
+    carried.push_back({&out.normals, &out.normal_indices, cage.normals, {}, 3});
+  for (Carried& c : carried) {
+    const std::vector<uint32_t>& idx = c.width == 2 ? cage.uv_indices : cage.normal_indices;
+    c.state = fvar_cage_state(options, P, pa, idx, c.values.size() / size_t(c.width));
+  }
+  std::vector<float> colors =
+      cage.colors.size() == 4 * cage.vertex_count() ? cage.colors : std::vector<float>();
+  // The output's faces (holes dropped) with their channels' corners.
+  auto emit_faces = [&](const RefinedLevel& L, const std::vector<uint8_t>& hole) {
+    for (size_t f = 0; f < L.face_count(); ++f) {
+      if (hole[f]) continue;
+      const uint32_t b = L.face_offsets[f], e = L.face_offsets[f + 1];
+      out.add_face(std::span<const uint32_t>(L.face_vertices.data() + b, e - b));
+      for (Carried& c : carried)
+        c.indices->insert(c.indices->end(), c.state.corner_value.begin() + b,
+                          c.state.corner_value.begin() + e);
+    }
+    for (Carried& c : carried) {
+      // Values are the level's own (on the cage: the caller's indices into its values).
+      if (!c.state.source.empty())
+        for (uint32_t& i : *c.indices) i = c.state.source[i];
+      *c.values_out = std::move(c.values);
+      if (c.width == 3) normalize3(*c.values_out);
+    }
+    out.colors = std::move(colors);
+  };
   if (depth == 0) {
     out.positions = cage.positions;
-    for (size_t f = 0; f < cage.face_count(); ++f)
-      if (!P.face_hole[f]) out.add_face(cage.face(f));
+    emit_faces(P, P.face_hole);
     out.crease_edges = cage.crease_edges, out.crease_sharpness = cage.crease_sharpness;
     out.corner_vertices = cage.corner_vertices, out.corner_sharpness = cage.corner_sharpness;
     if (stats) *stats = std::move(st);
     return out;
   }
-  std::vector<float> pos = cage.positions, next;
+  std::vector<float> pos = cage.positions, next, next_colors;
   std::vector<float> pe, ce;
   for (int k = 0; k < depth; ++k) {
     const Selection all = Selection::everything(P);
     t0 = clock::now();
     // Stencils are built chunk by chunk, applied at once and dropped: never stored whole.
     refill(next, 3 * all.points(), 0.0f);
+    if (!colors.empty()) refill(next_colors, 4 * all.points(), 0.0f);
     std::vector<size_t> entries((all.points() + kStencilChunk - 1) / kStencilChunk, 0);
     for_stencil_chunks(options, P, pa, all, [&](size_t b, StencilTable& t) {
       apply_serial(t, 0, t.size(), pos.data(), next.data() + 3 * b, 3);
+      if (!colors.empty())
+        apply_serial(t, 0, t.size(), colors.data(), next_colors.data() + 4 * b, 4);
       entries[b / kStencilChunk] = t.indices.size();
     });
+    colors.swap(next_colors);
+    for (Carried& c : carried) {
+      FVarState child;
+      const StencilTable t = fvar_refine(options, P, pa, c.state, child);
+      std::vector<float> v(t.size() * size_t(c.width));
+      apply_stencils(t, c.values.data(), v.data(), c.width);
+      c.values.swap(v);
+      c.state = std::move(child);
+    }
     st.stencils_ms += ms_since(t0);
     t0 = clock::now();
     const size_t nc = P.face_vertices.size();
@@ -693,24 +756,20 @@ Mesh subdivide_uniform(const Mesh& cage, int depth, const SubdivOptions& options
       out.corner_vertices.push_back(F + E + uint32_t(v));
       out.corner_sharpness.push_back(s);
     }
-    const bool holes = std::find(C.face_hole.begin(), C.face_hole.end(), 1) != C.face_hole.end();
-    if (holes) {
-      size_t w = 0;
-      for (size_t f = 0; f < C.face_hole.size(); ++f) {
-        if (C.face_hole[f]) continue;
-        std::copy_n(C.face_vertices.begin() + std::ptrdiff_t(4 * f), 4,
-                    C.face_vertices.begin() + std::ptrdiff_t(4 * w));
-        ++w;
-      }
-      C.face_vertices.resize(4 * w);
-      C.face_offsets.resize(w + 1);
-    }
     {
       RefinedLevel drop = std::move(P);
       Adj drop_adj = std::move(pa);
     }
-    out.face_offsets = std::move(C.face_offsets);
-    out.face_vertices = std::move(C.face_vertices);
+    const bool holes = std::find(C.face_hole.begin(), C.face_hole.end(), 1) != C.face_hole.end();
+    if (holes || !carried.empty()) {
+      out.face_offsets.reserve(C.face_count() + 1);
+      out.face_vertices.reserve(C.face_vertices.size());
+      emit_faces(C, C.face_hole);
+    } else {
+      out.face_offsets = std::move(C.face_offsets);
+      out.face_vertices = std::move(C.face_vertices);
+      out.colors = std::move(colors);
+    }
     out.positions = std::move(pos);
     st.output_ms += ms_since(t0);
   }

@@ -404,3 +404,82 @@ TEST_F(Cli, SubdivideAdaptiveDepthColoursAreDeeperNearTheCamera) {
 
 }  // namespace
 }  // namespace limn
+
+namespace limn {
+namespace {
+
+// Subdivision carries the cage's UVs: OBJ `vt` with `f v/vt`, GLB TEXCOORD_0, PLY (seams split),
+// equal to the library's face-varying refinement (which test_subdiv_fvar.cpp checks against
+// OpenSubdiv); outputs that cannot hold them say so.
+class CliUv : public test::CliTest {};
+
+TEST_F(CliUv, UniformAndLimitWriteTheRefinedUvs) {
+  const fs::path car = fs::path(LIMN_SHARED_MODELS) / "osd" / "catmark_car.obj";
+  if (!fs::exists(car)) GTEST_SKIP() << "no shared models";
+  const Mesh cage = read_mesh(car);
+  ASSERT_FALSE(cage.uv_indices.empty());
+  const SubdivOptions opt = subdiv_options(cage);
+  const FaceVaryingInput in{cage.uv_indices, cage.uvs.size() / 2};
+  const UniformRefinement r = refine_uniform(cage, 2, opt, {&in, 1});
+  const FaceVaryingLevels& fl = r.face_varying[0];
+  const std::vector<float> uv = fl.values(cage.uvs.data(), 2, 2);
+  std::vector<float> limit(uv.size());
+  apply_stencils(fl.limit, uv.data(), limit.data(), 2);
+  for (const bool lim : {false, true}) {
+    const fs::path out = dir() / (lim ? "limit.obj" : "uniform.obj");
+    const test::CliResult res = limn("subdivide " + q(car) + " -o " + q(out) + " --uniform 2" +
+                                     (lim ? " --limit" : "") + " --json");
+    ASSERT_EQ(res.code, 0) << res.err;
+    EXPECT_EQ(nlohmann::json::parse(res.out)["dropped"], nlohmann::json::array());
+    EXPECT_EQ(res.err, "");
+    const Mesh m = read_mesh(out);
+    ASSERT_EQ(m.uv_indices.size(), m.corner_count());
+    ASSERT_EQ(m.face_vertices, r.levels.back().face_vertices);
+    const std::vector<float>& want = lim ? limit : uv;
+    double worst = 0;
+    for (size_t c = 0; c < m.corner_count(); ++c)
+      for (size_t k = 0; k < 2; ++k)
+        worst = std::max(worst, double(std::fabs(m.uvs[2 * m.uv_indices[c] + k] -
+                                                 want[2 * fl.corner_values.back()[c] + k])));
+    EXPECT_LE(worst, 1e-6) << (lim ? "limit" : "uniform");
+  }
+  // GLB: TEXCOORD_0 on split seam vertices; PLY: per-vertex u, v after splitting.
+  for (const char* ext : {".glb", ".ply"}) {
+    const fs::path out = dir() / (std::string("car") + ext);
+    const test::CliResult res = limn("subdivide " + q(car) + " -o " + q(out) + " --uniform 1");
+    ASSERT_EQ(res.code, 0) << res.err;
+    if (std::string(ext) == ".ply") {
+      const Mesh m = read_mesh(out);
+      EXPECT_EQ(m.uv_indices.size(), m.corner_count());
+      continue;
+    }
+    tinygltf::Model model;
+    tinygltf::TinyGLTF loader;
+    std::string err, warn;
+    ASSERT_TRUE(loader.LoadBinaryFromFile(&model, &err, &warn, out.string())) << err;
+    const auto& attrs = model.meshes.at(0).primitives.at(0).attributes;
+    ASSERT_EQ(attrs.count("TEXCOORD_0"), 1u);
+    EXPECT_EQ(model.accessors[size_t(attrs.at("TEXCOORD_0"))].count,
+              model.accessors[size_t(attrs.at("POSITION"))].count);
+  }
+}
+
+TEST_F(CliUv, WhatAnOutputCannotHoldIsNamed) {
+  const fs::path car = fs::path(LIMN_SHARED_MODELS) / "osd" / "catmark_car.obj";
+  if (!fs::exists(car)) GTEST_SKIP() << "no shared models";
+  test::CliResult res =
+      limn("subdivide " + q(car) + " -o " + q(dir() / "car.off") + " --uniform 1 --json");
+  ASSERT_EQ(res.code, 0) << res.err;
+  const nlohmann::json dropped = nlohmann::json::parse(res.out)["dropped"];
+  EXPECT_EQ(dropped, nlohmann::json({"uv", "creases", "corners"}));
+  EXPECT_THAT(res.err, HasSubstr("warning"));
+  EXPECT_THAT(res.err, HasSubstr("uv"));
+  // The adaptive surface has no face-varying patches yet: it says it drops the UVs.
+  res =
+      limn("subdivide " + q(car) + " -o " + q(dir() / "car.obj") + " --adaptive --depth 1 --json");
+  ASSERT_EQ(res.code, 0) << res.err;
+  EXPECT_EQ(nlohmann::json::parse(res.out)["dropped"], nlohmann::json({"uv"}));
+}
+
+}  // namespace
+}  // namespace limn

@@ -180,21 +180,27 @@ TEST(Ply, RoundTripAsciiIsExact) {
   expect_same(read_ply(out, "rt.ply"), m);
 }
 
-TEST(Ply, RoundTripWithoutAttributesWritesOnlyPositions) {
+TEST(Ply, SplitsVerticesWhereACornerHasItsOwnNormal) {
   Mesh m = awkward_mesh();
   m.colors.clear();
   m.uvs.clear();
   m.uv_indices.clear();
-  m.normal_indices[0] = 1;  // not per-vertex any more: cannot be written as vertex properties
+  m.normal_indices[0] = 1;  // corner 0 disagrees with its vertex's other corners: a seam
   std::string out;
   write_ply(m, out, false);
-  EXPECT_THAT(out, ::testing::Not(HasSubstr("property float nx")));
+  EXPECT_THAT(out, HasSubstr("property float nx"));
   EXPECT_THAT(out, ::testing::Not(HasSubstr("red")));
   const Mesh r = read_ply(out, "rt.ply");
-  EXPECT_EQ(r.positions, m.positions);
-  EXPECT_EQ(r.face_vertices, m.face_vertices);
-  EXPECT_TRUE(r.normals.empty());
-  EXPECT_TRUE(r.colors.empty());
+  ASSERT_EQ(r.corner_count(), m.corner_count());
+  EXPECT_EQ(r.face_offsets, m.face_offsets);
+  // Every corner keeps its position and its own normal.
+  for (size_t c = 0; c < m.corner_count(); ++c)
+    for (size_t k = 0; k < 3; ++k) {
+      EXPECT_EQ(r.positions[3 * r.face_vertices[c] + k], m.positions[3 * m.face_vertices[c] + k]);
+      EXPECT_EQ(r.normals[3 * r.face_vertices[c] + k], m.normals[3 * m.normal_indices[c] + k]);
+    }
+  // Only the vertex with two normals is split.
+  EXPECT_EQ(r.vertex_count(), m.vertex_count() + 1);
 }
 
 TEST(Ply, LargeFacesUseAWideListCount) {

@@ -288,5 +288,64 @@ TEST(FVarBuilt, TorusSeamsHaveAJunction) {
   EXPECT_EQ(four, 1u);
 }
 
+// The lean path (subdivide_uniform) carries the UVs, per-corner normals (renormalised) and
+// vertex colours of refine_uniform, corner by corner, holes dropped on both.
+TEST(FVarLean, CarriesWhatRefineUniformComputes) {
+  std::vector<Mesh> cages = {torus_seams(), dart_grid()};
+  const fs::path holes = fs::path(LIMN_SHARED_MODELS) / "osd" / "catmark_hole_test3.obj";
+  if (fs::exists(holes)) cages.push_back(read_mesh(holes));
+  for (Mesh& cage : cages) {
+    cage.colors.resize(4 * cage.vertex_count());
+    for (size_t i = 0; i < cage.colors.size(); ++i) cage.colors[i] = float(i % 7) / 7.0f;
+    cage.normals = {0, 0, 1, 0, 1, 0, 1, 0, 0};
+    cage.normal_indices.assign(cage.corner_count(), 0);
+    for (size_t c = 0; c < cage.corner_count(); ++c) cage.normal_indices[c] = uint32_t(c % 3);
+    for (int mode : {0, 3, 5}) {
+      SubdivOptions opt = subdiv_options(cage);
+      opt.face_varying = FVarInterpolation(mode);
+      const FaceVaryingInput in[2] = {{cage.uv_indices, cage.uvs.size() / 2},
+                                      {cage.normal_indices, 3}};
+      for (int depth : {0, 2}) {
+        const UniformRefinement r = refine_uniform(cage, depth, opt, in);
+        const Mesh lean = subdivide_uniform(cage, depth, opt);
+        const RefinedLevel& L = r.levels.back();
+        const std::vector<float> uv = r.face_varying[0].values(cage.uvs.data(), 2, depth);
+        const std::vector<float> nrm = r.face_varying[1].values(cage.normals.data(), 3, depth);
+        ASSERT_EQ(lean.uv_indices.size(), lean.corner_count());
+        ASSERT_EQ(lean.normal_indices.size(), lean.corner_count());
+        size_t c = 0;
+        double worst_uv = 0, worst_n = 0;
+        for (size_t f = 0; f < L.face_count(); ++f) {
+          if (L.face_hole[f]) continue;
+          for (uint32_t i = L.face_offsets[f]; i < L.face_offsets[f + 1]; ++i, ++c) {
+            ASSERT_EQ(lean.face_vertices[c], L.face_vertices[i]);
+            const size_t a = r.face_varying[0].corner_values.back()[i], b = lean.uv_indices[c];
+            for (size_t k = 0; k < 2; ++k)
+              worst_uv = std::max(worst_uv, double(std::fabs(uv[2 * a + k] - lean.uvs[2 * b + k])));
+            const size_t na = r.face_varying[1].corner_values.back()[i],
+                         nb = lean.normal_indices[c];
+            const double len = std::hypot(nrm[3 * na], nrm[3 * na + 1], nrm[3 * na + 2]);
+            for (size_t k = 0; k < 3; ++k)
+              worst_n =
+                  std::max(worst_n, std::fabs(nrm[3 * na + k] / len - lean.normals[3 * nb + k]));
+          }
+        }
+        EXPECT_EQ(c, lean.corner_count());
+        EXPECT_LE(worst_uv, 1e-6) << "mode " << mode << " depth " << depth;
+        EXPECT_LE(worst_n, 1e-6) << "mode " << mode << " depth " << depth;
+        // Colours follow the vertex stencils.
+        std::vector<float> col = cage.colors, next;
+        for (const StencilTable& t : r.stencils) {
+          next.assign(4 * t.size(), 0.0f);
+          apply_stencils(t, col.data(), next.data(), 4);
+          col.swap(next);
+        }
+        ASSERT_EQ(lean.colors.size(), col.size());
+        for (size_t i = 0; i < col.size(); ++i) ASSERT_NEAR(lean.colors[i], col[i], 1e-6);
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace limn

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "limn/mesh/file.hpp"
 #include "limn/mesh/mesh.hpp"
@@ -47,6 +48,13 @@ std::string write_mesh_memory(const Mesh& mesh, MeshFormat format, bool ascii_pl
 /// Writes a mesh atomically (temp file in the same folder, then rename). Throws InputError for a
 /// format that cannot be chosen, std::runtime_error when the file cannot be written.
 void write_mesh(const Mesh& mesh, const std::filesystem::path& path, const WriteOptions& opt = {});
+
+/// What writing `mesh` as `format` would lose: "uv", "normals", "colors", "alpha" (colour
+/// alpha other than 1: OBJ keeps RGB), "creases", "corners", "holes", "tags" (OpenSubdiv scheme
+/// tags), in that order; empty when the file keeps everything. OBJ keeps all but alpha; PLY and
+/// GLB keep UVs, normals and colours (seams split into separate vertices) but no subdivision
+/// tags; OFF keeps geometry only. O(V + corners).
+std::vector<std::string> dropped_attributes(const Mesh& mesh, MeshFormat format);
 
 /// Per-format writers (what write_mesh dispatches to), appending to `out`.
 void write_obj(const Mesh& mesh, std::string& out);
