@@ -82,7 +82,13 @@ void run(const SimplifyOpts& o, CLI::App* cmd) {
   const SurfaceDistance dist = surface_distance(r.output.mesh, mesh, o.samples, o.seed);
   const double t_distance = sw.lap();
 
-  write_mesh(r.output.mesh, o.out);
+  // Vertices are input vertices: colours, UVs and normals come along (carry_attributes); the
+  // subdivision tags describe the input's edges and faces, which are gone.
+  std::vector<std::string> lost;
+  if (!mesh.crease_sharpness.empty()) lost.emplace_back("creases");
+  if (!mesh.corner_sharpness.empty()) lost.emplace_back("corners");
+  if (!mesh.hole_faces.empty()) lost.emplace_back("holes");
+  const nlohmann::json dropped = write_output(r.output.mesh, o.out, lost);
   if (!o.labels.empty()) {
     std::string text;
     text.reserve(r.labels.size() * 4);
@@ -109,6 +115,7 @@ void run(const SimplifyOpts& o, CLI::App* cmd) {
     nlohmann::json j = {
         {"input", o.mesh},
         {"output", o.out},
+        {"dropped", dropped},
         {"labels", o.labels.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.labels)},
         {"method", o.method},
         {"seeding", o.seeding},

@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "core/timer.hpp"
+#include "simplify/carry_attributes.hpp"
 #include "simplify/cluster_edit.hpp"
 #include "simplify/greedy.hpp"
 #include "simplify/lloyd.hpp"
@@ -131,6 +132,7 @@ VsaResult simplify_vsa(const Mesh& mesh, const VsaOptions& options, std::string_
   r.stats.prepare_ms = prepare;
   t = std::chrono::steady_clock::now();
   r.output = polygonize(s, p, options.meshing);
+  carry_attributes(mesh, p.label, r.output);
   r.stats.meshing_ms = ms_since(t);
   r.stats.clusters = p.cluster_count();
   r.stats.energy = p.energy();
