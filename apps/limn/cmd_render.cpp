@@ -20,6 +20,7 @@ void add_render(CLI::App& app) {
   struct Opts {
     std::string mesh, out, format, background = "1,1,1", texture;
     bool adaptive = false, wireframe = false, flat = false, nearest = false, json = false;
+    float uv_checker = 0.0f;
     int samples = 4;
     AdaptiveOpts a;
   };
@@ -35,6 +36,8 @@ void add_render(CLI::App& app) {
                   "Colour from an octree texture (.lot, limn paint) painted on this surface");
   cmd->add_flag("--nearest", o->nearest, "--texture: nearest texel, not filtered");
   cmd->add_flag("--flat", o->flat, "Mesh: one normal per polygon (faceted), not per vertex");
+  cmd->add_option("--uv-checker", o->uv_checker,
+                  "Mesh with UVs: show them as a checker of N squares per UV unit");
   cmd->add_option("--samples", o->samples, "Multisampling (1-16, default 4)");
   cmd->add_option("--background", o->background, "Background colour r,g,b (0-1, default white)");
   cmd->add_option("--format", o->format, "Input format, overriding the extension");
@@ -47,6 +50,10 @@ void add_render(CLI::App& app) {
                             "--tess-px", "--depth-colors"})
         if (cmd->count(a)) throw InputError(fmt::format("{} goes with --adaptive", a));
     if (o->adaptive && o->flat) throw InputError("--flat is for meshes, not --adaptive");
+    if (o->adaptive && cmd->count("--uv-checker"))
+      throw InputError("--uv-checker is for meshes (the adaptive surface carries no UVs yet)");
+    if (cmd->count("--uv-checker") && !(o->uv_checker > 0 && o->uv_checker <= 1024))
+      throw InputError(fmt::format("--uv-checker {}: squares per UV unit, 0-1024", o->uv_checker));
     if (o->nearest && o->texture.empty()) throw InputError("--nearest goes with --texture");
     if (o->samples < 1 || o->samples > 16)
       throw InputError(fmt::format("--samples {}: must be 1-16", o->samples));
@@ -98,6 +105,9 @@ void add_render(CLI::App& app) {
     d.factor = fixed_tess ? o->a.tess : 0;
     d.texture = gpu_texture ? &*gpu_texture : nullptr;
     d.texture_nearest = o->nearest;
+    d.uv_checker = o->uv_checker;
+    if (d.uv_checker > 0 && mesh.uv_indices.empty())
+      throw InputError(fmt::format("{}: --uv-checker: the mesh has no UVs", o->mesh));
     DrawStats st;
     nlohmann::json patches = nullptr;
     Camera cam;

@@ -20,6 +20,7 @@ namespace {
 // polygon (a diagonal of its triangulation) is lifted by 1, so only polygon edges are outlined.
 struct Vertex {
   float pos[3], nrm[3], col[3], bary[3];
+  float uv[3];  // u, v, and 1 when the mesh has UVs
 };
 
 // Triangles of polygon `f` as triples of corner offsets 0..n-1: ear clipping in the plane of its
@@ -104,6 +105,7 @@ MeshDrawer::MeshDrawer(const Mesh& mesh, std::span<const float> face_colors, boo
   float fn[3] = {0, 0, 1};
   const bool vertex_colors = mesh.colors.size() == 4 * mesh.vertex_count();
   m.has_colors = vertex_colors || !face_colors.empty();
+  const bool has_uvs = !mesh.uv_indices.empty();
   std::vector<Vertex> out;
   out.reserve(3 * (mesh.corner_count() - 2 * std::min(mesh.corner_count(), m.faces)));
   auto corner = [&](size_t f, uint32_t c, const float bary[3]) {
@@ -118,6 +120,10 @@ MeshDrawer::MeshDrawer(const Mesh& mesh, std::span<const float> face_colors, boo
                  : vertex_colors      ? mesh.colors[4 * size_t(p) + size_t(k)]
                                       : 1.0f;
       v.bary[k] = bary[k];
+    }
+    if (has_uvs) {
+      const uint32_t t = mesh.uv_indices[c];
+      v.uv[0] = mesh.uvs[2 * size_t(t)], v.uv[1] = mesh.uvs[2 * size_t(t) + 1], v.uv[2] = 1.0f;
     }
     out.push_back(v);
   };
@@ -146,7 +152,7 @@ MeshDrawer::MeshDrawer(const Mesh& mesh, std::span<const float> face_colors, boo
   glCreateVertexArrays(1, &n);
   m.vao = gl::VertexArray(n);
   glVertexArrayVertexBuffer(n, 0, m.vertices.get(), 0, sizeof(Vertex));
-  for (GLuint a = 0; a < 4; ++a) {
+  for (GLuint a = 0; a < 5; ++a) {
     glEnableVertexArrayAttrib(n, a);
     glVertexArrayAttribFormat(n, a, 3, GL_FLOAT, GL_FALSE, a * 3 * sizeof(float));
     glVertexArrayAttribBinding(n, a, 0);
@@ -174,6 +180,7 @@ DrawStats MeshDrawer::draw(const Camera& camera, const DrawOptions& o) {
   glUseProgram(prog);
   glUniformMatrix4fv(glGetUniformLocation(prog, "view_proj"), 1, GL_FALSE, vp.data());
   glUniform3fv(glGetUniformLocation(prog, "eye"), 1, camera.eye);
+  glUniform1f(glGetUniformLocation(prog, "uv_checker"), o.uv_checker);
   if (o.texture) o.texture->bind(prog, o.texture_nearest ? 1 : 2);
   glBindVertexArray(m.vao.get());
   // Without colours of its own the mesh takes the options' colour (a constant attribute).

@@ -612,3 +612,49 @@ TEST(Render, PngRoundTripsAndFailsCleanly) {
 
 }  // namespace
 }  // namespace limn
+
+namespace limn {
+namespace {
+
+// --uv-checker: on a unit quad mapped to [0,1]^2, two squares per UV unit alternate light and
+// dark where the UVs say, at pixels found by projecting the quad's points (not by where limn
+// puts them); without the option the quad is one colour.
+TEST(Render, UvCheckerFollowsTheUvs) {
+  context();
+  Mesh quad;
+  for (float y : {0.0f, 1.0f})
+    for (float x : {0.0f, 1.0f}) quad.add_vertex(x - 0.5f, y - 0.5f, 0.0f);
+  quad.add_face({0, 1, 3, 2});
+  quad.uvs = {0, 0, 1, 0, 0, 1, 1, 1};
+  quad.uv_indices = quad.face_vertices;
+  Camera cam;
+  cam.eye[2] = 2.0f, cam.width = 200, cam.height = 200;
+  MeshDrawer drawer(quad);
+  RenderTarget target(200, 200, 1);
+  const float black[4] = {0, 0, 0, 1};
+  auto brightness_at = [&](const std::vector<uint8_t>& px, float u, float v) {
+    const float p[3] = {u - 0.5f, v - 0.5f, 0.0f};
+    double x = 0, y = 0;
+    EXPECT_TRUE(cam.project(p, x, y));
+    const uint8_t* c = &px[4 * (size_t(y) * 200 + size_t(x))];
+    return int(c[0]) + c[1] + c[2];
+  };
+  DrawOptions o;
+  o.uv_checker = 2.0f;
+  target.begin(black);
+  drawer.draw(cam, o);
+  std::vector<uint8_t> px = target.read_rgba();
+  const int a = brightness_at(px, 0.25f, 0.25f), b = brightness_at(px, 0.75f, 0.25f),
+            c = brightness_at(px, 0.25f, 0.75f), d = brightness_at(px, 0.75f, 0.75f);
+  EXPECT_LT(b, 0.75 * a);
+  EXPECT_LT(c, 0.75 * a);
+  EXPECT_LT(b, 0.75 * d);
+  EXPECT_LT(c, 0.75 * d);
+  target.begin(black);
+  drawer.draw(cam, DrawOptions{});
+  px = target.read_rgba();
+  EXPECT_NEAR(brightness_at(px, 0.25f, 0.25f), brightness_at(px, 0.75f, 0.25f), 20);
+}
+
+}  // namespace
+}  // namespace limn

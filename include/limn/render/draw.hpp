@@ -36,6 +36,9 @@ struct DrawOptions {
   /// normal, over the base or depth colour; null: none.
   const GpuOctreeTexture* texture = nullptr;
   bool texture_nearest = false;  ///< nearest texel, not filtered (trilinear + mip by footprint)
+  /// Meshes with UVs: a checker of this many squares per UV unit, tinted by (u, v) so flips and
+  /// seams show; 0: off. Corners without UVs keep their colour.
+  float uv_checker = 0.0f;
 };
 
 /// What a draw did. GPU time is measured with a timer query (0 when the driver has none).

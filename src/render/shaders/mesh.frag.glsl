@@ -3,7 +3,9 @@ in vec3 t_pos;
 in vec3 t_nrm;
 in vec3 t_col;
 in vec3 t_bary;
+in vec3 t_uv;
 uniform vec3 eye;
+uniform float uv_checker;
 out vec4 frag;
 void main() {
   float edge = 1e9;
@@ -11,5 +13,13 @@ void main() {
     vec3 d = t_bary / max(fwidth(t_bary), vec3(1e-9));
     edge = min(d.x, min(d.y, d.z));
   }
-  frag = vec4(shade(oct_paint(t_col, t_pos, t_nrm), t_pos, t_nrm, eye, edge, outline), 1.0);
+  vec3 base = t_col;
+  if (uv_checker > 0.0 && t_uv.z > 0.5) {
+    // Light and dark squares, tinted red along u and green along v within each unit square.
+    vec2 q = floor(t_uv.xy * uv_checker);
+    float dark = mod(q.x + q.y, 2.0);
+    vec3 tint = vec3(0.35 + 0.65 * fract(t_uv.x), 0.35 + 0.65 * fract(t_uv.y), 0.6);
+    base = tint * (dark > 0.5 ? 0.45 : 1.0);
+  }
+  frag = vec4(shade(oct_paint(base, t_pos, t_nrm), t_pos, t_nrm, eye, edge, outline), 1.0);
 }
