@@ -185,7 +185,7 @@ void add_subdivide(CLI::App& app) {
       timings["output"] = st.output_ms;
     } else {
       // UVs refined as face-varying data and pushed to their own limit.
-      const FaceVaryingInput uv_channel{cage.uv_indices, cage.uvs.size() / 2};
+      const FaceVaryingInput uv_channel{cage.uv_indices, cage.uvs.size() / 2, true};
       const bool uv = !cage.uv_indices.empty();
       const UniformRefinement r =
           refine_uniform(cage, o->uniform, options, {&uv_channel, uv ? 1u : 0u});

@@ -18,9 +18,11 @@
 
 #include <algorithm>
 
+#include "core/parallel.hpp"
 #include "limit_masks.hpp"
 #include "limn/subdiv/refine.hpp"
 #include "rules.hpp"
+#include "shared_weights.hpp"
 
 namespace limn {
 namespace refine_detail {
@@ -186,16 +188,23 @@ void tag_values(const Mode& m, const RefinedLevel& L, const Adj& a, const Spans&
 
 // After a step, semi-sharp values whose sharpness has decayed become creases
 // (FVarRefinement::reclassifySemisharpValues). `ce` holds the child sharpness of v's edges.
-void reclassify(const Mode& m, const RefinedLevel& P, const Adj& a, Spans& spans, uint32_t v,
-                const std::vector<float>& ce, uint32_t pb, uint8_t* tag, uint32_t nvals) {
-  bool p_semi_edges = false, c_semi_edges = false;
-  for (uint32_t k = a.veo[v]; k < a.veo[v + 1]; ++k) {
+void reclassify(const SubdivOptions& o, const Mode& m, const RefinedLevel& P, const Adj& a,
+                const Spans& spans, uint32_t v, uint32_t pb, uint8_t* tag, uint32_t nvals,
+                std::vector<float>& ce, std::vector<float>& pe_scratch,
+                std::vector<float>& ce_scratch) {
+  bool p_semi_edges = false;
+  for (uint32_t k = a.veo[v]; k < a.veo[v + 1]; ++k)
     p_semi_edges |= semi_sharp(P.edge_sharpness[a.ve[k]]);
-    c_semi_edges |= semi_sharp(ce[k - a.veo[v]]);
-  }
   const float pv = P.vertex_sharpness[v], cv = decrement(pv);
   if (!semi_sharp(pv) && !p_semi_edges) return;
   if (semi_sharp(cv) || cv >= kInf) return;
+  // The child sharpness of v's edges (their halves at v).
+  ce.clear();
+  bool c_semi_edges = false;
+  for (uint32_t k = a.veo[v]; k < a.veo[v + 1]; ++k) {
+    ce.push_back(half_sharpness_at(o, P, a, a.ve[k], v, pe_scratch, ce_scratch));
+    c_semi_edges |= semi_sharp(ce.back());
+  }
   for (uint32_t i = 0; i < nvals; ++i) {
     if (!(tag[i] & kFvSemiSharp)) continue;
     bool still = false;
@@ -223,9 +232,12 @@ void emit(StencilTable& t, std::initializer_list<std::pair<uint32_t, double>> te
 }
 
 void emit(StencilTable& t, const Terms& terms) {
-  for (size_t k = 0; k < terms.n; ++k)
-    t.indices.push_back(terms.idx[k]), t.weights.push_back(float(terms.w[k]));
-  t.offsets.push_back(uint32_t(t.indices.size()));
+  const size_t b = t.indices.size(), n = terms.n;
+  t.indices.resize(b + n), t.weights.resize(b + n);
+  uint32_t* ix = t.indices.data() + b;
+  float* w = t.weights.data() + b;
+  for (size_t k = 0; k < n; ++k) ix[k] = terms.idx[k], w[k] = float(terms.w[k]);
+  t.offsets.push_back(uint32_t(b + n));
 }
 
 // Position of half-edge h among edge e's.
@@ -261,6 +273,100 @@ void ring_corners(const LevelRef& l, bool non_manifold, uint32_t v, std::vector<
     if (a.edge_face_count(e) != 2) break;
     const uint32_t h0 = a.ec[a.eco[e]], h1 = a.ec[a.eco[e] + 1];
     c = h0 == l.prev(c) ? h1 : h0;
+  }
+}
+
+constexpr size_t kChunk = 1 << 13;
+
+// Where child rows go: appended to a table, or applied to values at once (the lean path).
+struct TableSink {
+  StencilTable& t;
+  void row(const Terms& terms) { emit(t, terms); }
+  void row(std::initializer_list<std::pair<uint32_t, double>> terms) { emit(t, terms); }
+};
+
+// Computes row after row of `width` floats: out[next] from in, weights rounded to float and
+// summed in double as apply_stencils does, so both paths give the same values.
+struct ApplySink {
+  const float* in;
+  float* out;
+  int width;
+  size_t next = 0;
+  void row(const Terms& terms) {
+    double acc[4] = {0, 0, 0, 0};
+    for (size_t k = 0; k < terms.n; ++k) add(acc, terms.idx[k], terms.w[k]);
+    store(acc);
+  }
+  void row(std::initializer_list<std::pair<uint32_t, double>> terms) {
+    double acc[4] = {0, 0, 0, 0};
+    for (const auto& [i, w] : terms) add(acc, i, w);
+    store(acc);
+  }
+  void add(double* acc, uint32_t i, double w) const {
+    const double wf = double(float(w));
+    for (int k = 0; k < width; ++k)
+      acc[k] += wf * double(in[size_t(i) * size_t(width) + size_t(k)]);
+  }
+  void store(const double* acc) {
+    for (int k = 0; k < width; ++k) out[next * size_t(width) + size_t(k)] = float(acc[k]);
+    ++next;
+  }
+};
+
+// Sends the stencils of child vertex i's values (face point, edge point or vertex point of level
+// P, derive_child's numbering) to `sink`.
+template <class Sink>
+void child_rows(const SubdivOptions& o, const Mode& m, const RefinedLevel& P, const FVarState& ps,
+                const FVarState& cs, const FVarIds& ids, Rules<FVarIds>& rules, Spans& spans,
+                uint32_t i, std::vector<float>& pe, std::vector<float>& ce, Sink& t) {
+  const Adj& a = ids.l.a;
+  const uint32_t F = uint32_t(P.face_count()), E = uint32_t(P.edge_count());
+  const uint32_t cb = cs.offsets[i], n = cs.offsets[i + 1] - cb;
+  if (i < F) {
+    rules.face(i);
+    return t.row(rules.terms());
+  }
+  if (i < F + E) {
+    const uint32_t e = i - F;
+    if (!(cs.tag[cb] & kFvMismatch)) {
+      if (!m.linear_all) {
+        rules.edge(e);
+        return t.row(rules.terms());
+      }
+      const uint32_t x = P.edge_vertices[2 * size_t(e)], y = P.edge_vertices[2 * size_t(e) + 1];
+      return t.row({{ids.end(e, x), 0.5}, {ids.end(e, y), 0.5}});
+    }
+    for (uint32_t j = 0; j < n; ++j) {  // each side of a seam: its own midpoint
+      const uint32_t h = a.ec[a.eco[e] + j];
+      t.row({{ids.corner(h), 0.5}, {ids.corner(ids.l.next(h)), 0.5}});
+    }
+    return;
+  }
+  if (n == 0) return;
+  const uint32_t v = i - F - E, pb = ps.offsets[v];
+  if (!(cs.tag[cb] & kFvMismatch)) {
+    if (m.linear_all) return t.row({{ids.id(pb), 1.0}});
+    rules.vertex(v);
+    return t.row(rules.terms());
+  }
+  uint32_t end_values[2];
+  for (uint32_t k = 0; k < n; ++k) {
+    if (m.linear_all || !(cs.tag[cb + k] & kFvCrease) || !spans.ends(v, pb + k, end_values)) {
+      t.row({{ids.id(pb + k), 1.0}});
+      continue;
+    }
+    double vw = 0.75, ew = 0.125;
+    const uint8_t ptag = ps.tag[pb + k];
+    if (ptag & kFvSemiSharp) {
+      // The fractional weight of the span whose sharpness this value follows.
+      const uint32_t from = (ptag & kFvDepSharp) ? pb + (1 - k) : pb + k;
+      spans.interior_sharpness(o, v, from, pe, ce);
+      const float pvs = P.vertex_sharpness[v];
+      const double wc =
+          fractional_weight(o, pvs, decrement(pvs), pe.data(), ce.data(), int(pe.size()));
+      vw = (1.0 - wc) * 0.75 + wc, ew = (1.0 - wc) * 0.125;
+    }
+    t.row({{ids.id(end_values[0]), ew}, {ids.id(end_values[1]), ew}, {ids.id(pb + k), vw}});
   }
 }
 
@@ -349,8 +455,12 @@ FVarState fvar_cage_state(const SubdivOptions& o, const RefinedLevel& L0, const 
   return s;
 }
 
-StencilTable fvar_refine(const SubdivOptions& o, const RefinedLevel& P, const Adj& a,
-                         const FVarState& ps, FVarState& cs) {
+namespace {
+
+// The channel on the child level of P (values, tags, corners, edges): the part of a step both
+// the stencils and the lean path's direct application need.
+void fvar_child_state(const SubdivOptions& o, const RefinedLevel& P, const Adj& a,
+                      const FVarState& ps, FVarState& cs) {
   const Mode m(o);
   const LevelRef l{P, a};
   const uint32_t F = uint32_t(P.face_count()), E = uint32_t(P.edge_count()),
@@ -376,102 +486,127 @@ StencilTable fvar_refine(const SubdivOptions& o, const RefinedLevel& P, const Ad
   for (uint32_t e = 0; e < E; ++e)
     if (ps.edge[e] & (kFvEdgeMismatch | kFvEdgeLinear))
       std::fill(cs.tag.begin() + cs.offsets[F + e], cs.tag.begin() + cs.offsets[F + e + 1], split);
-  Spans spans(P, a, ps);
-  std::vector<float> ce;
-  std::vector<float> pe_scratch, ce_scratch;
-  for (uint32_t v = 0; v < V; ++v) {
-    const uint32_t cb = cs.offsets[F + E + v], n = cs.offsets[F + E + v + 1] - cb;
-    if (n == 0) continue;
-    std::copy_n(ps.tag.begin() + ps.offsets[v], n, cs.tag.begin() + cb);
-    if (!m.smooth_boundaries() || !(cs.tag[cb] & kFvMismatch)) continue;
-    ce.clear();
-    for (uint32_t k = a.veo[v]; k < a.veo[v + 1]; ++k)
-      ce.push_back(half_sharpness_at(o, P, a, a.ve[k], v, pe_scratch, ce_scratch));
-    reclassify(m, P, a, spans, v, ce, ps.offsets[v], cs.tag.data() + cb, n);
-  }
+  const Spans spans(P, a, ps);
+  parallel_range(V, kChunk, [&](size_t vb, size_t ve) {
+    std::vector<float> ce, pe_scratch, ce_scratch;
+    for (size_t v = vb; v < ve; ++v) {
+      const uint32_t cb = cs.offsets[F + E + v], n = cs.offsets[F + E + v + 1] - cb;
+      if (n == 0) continue;
+      std::copy_n(ps.tag.begin() + ps.offsets[v], n, cs.tag.begin() + cb);
+      if (m.smooth_boundaries() && (cs.tag[cb] & kFvMismatch))
+        reclassify(o, m, P, a, spans, uint32_t(v), ps.offsets[v], cs.tag.data() + cb, n, ce,
+                   pe_scratch, ce_scratch);
+    }
+  });
   // Child corners (derive_child's quads: vertex point, outgoing edge point, face point,
   // incoming edge point) and child edges (a seam's halves stay seams).
   cs.corner_value.resize(4 * size_t(NC));
-  for (uint32_t f = 0; f < F; ++f)
-    for (uint32_t c = P.face_offsets[f]; c < P.face_offsets[f + 1]; ++c) {
-      const uint32_t p = l.prev(c), v = P.face_vertices[c];
-      const uint32_t e0 = a.corner_edge[c], e1 = a.corner_edge[p];
-      auto on_edge = [&](uint32_t e, uint32_t h) {
-        const uint32_t b = cs.offsets[F + e];
-        return cs.offsets[F + e + 1] - b > 1 ? b + slot_on_edge(a, e, h) : b;
-      };
-      const uint32_t vb = cs.offsets[F + E + v];
-      uint32_t* q = &cs.corner_value[4 * size_t(c)];
-      q[0] = cs.offsets[F + E + v + 1] - vb > 1 ? vb + (pv[c] - ps.offsets[v]) : vb;
-      q[1] = on_edge(e0, c);
-      q[2] = cs.offsets[f];
-      q[3] = on_edge(e1, p);
-    }
+  auto on_edge = [&](uint32_t e, uint32_t h) {
+    const uint32_t b = cs.offsets[F + e];
+    return cs.offsets[F + e + 1] - b > 1 ? b + slot_on_edge(a, e, h) : b;
+  };
+  parallel_range(F, kChunk, [&](size_t fb, size_t fe) {
+    for (size_t f = fb; f < fe; ++f)
+      for (uint32_t c = P.face_offsets[f]; c < P.face_offsets[f + 1]; ++c) {
+        const uint32_t p = l.prev(c), v = P.face_vertices[c];
+        const uint32_t vb = cs.offsets[F + E + v];
+        uint32_t* q = &cs.corner_value[4 * size_t(c)];
+        q[0] = cs.offsets[F + E + v + 1] - vb > 1 ? vb + (pv[c] - ps.offsets[v]) : vb;
+        q[1] = on_edge(a.corner_edge[c], c);
+        q[2] = cs.offsets[f];
+        q[3] = on_edge(a.corner_edge[p], p);
+      }
+  });
   cs.edge.assign(size_t(NC) + 2 * size_t(E), 0);
   for (uint32_t e = 0; e < E; ++e) cs.edge[NC + 2 * e] = cs.edge[NC + 2 * e + 1] = ps.edge[e];
+}
 
-  // Stencils, in child value order.
-  const uint32_t* src = ps.source.empty() ? nullptr : ps.source.data();
-  const FVarIds ids{l, pv, src};
+// Runs child_rows over chunks of child vertices in parallel, each chunk with its own rules and
+// scratch, into the sink make_sink(chunk, first child vertex, end) returns.
+template <class MakeSink>
+void for_child_chunks(const SubdivOptions& o, const RefinedLevel& P, const Adj& a,
+                      const FVarState& ps, const FVarState& cs, MakeSink&& make_sink) {
+  const Mode m(o);
+  const FVarIds ids{{P, a}, ps.corner_value.data(), ps.source.empty() ? nullptr : ps.source.data()};
   const Selection all = Selection::everything(P);
-  Rules<FVarIds> rules(o, P, a, all, ids);
+  const size_t n = P.face_count() + P.edge_count() + P.vertex_count();
+  const size_t chunks = (n + kChunk - 1) / kChunk;
+  parallel_range(chunks, 1, [&](size_t cb, size_t ce_) {
+    Rules<FVarIds> rules(o, P, a, all, ids);
+    Spans local(P, a, ps);
+    std::vector<float> pe, ce;
+    for (size_t c = cb; c < ce_; ++c) {
+      const size_t first = c * kChunk, last = std::min(n, first + kChunk);
+      auto sink = make_sink(c, first, last);
+      for (size_t i = first; i < last; ++i)
+        child_rows(o, m, P, ps, cs, ids, rules, local, uint32_t(i), pe, ce, sink);
+    }
+  });
+}
+
+}  // namespace
+
+StencilTable fvar_refine(const SubdivOptions& o, const RefinedLevel& P, const Adj& a,
+                         const FVarState& ps, FVarState& cs) {
+  fvar_child_state(o, P, a, ps, cs);
+  // Stencils, in child value order (child vertex by child vertex), built in parallel chunks.
+  const size_t n = P.face_count() + P.edge_count() + P.vertex_count();
+  const size_t chunks = (n + kChunk - 1) / kChunk;
+  std::vector<StencilTable> parts(chunks);
+  for_child_chunks(o, P, a, ps, cs, [&](size_t c, size_t first, size_t last) {
+    StencilTable& t = parts[c];
+    const size_t rows = cs.offsets[last] - cs.offsets[first];
+    // Room for the usual rows (a vertex point's smooth mask is 2 * valence + 1 entries).
+    t.offsets.reserve(rows + 1);
+    t.indices.reserve(rows * 10), t.weights.reserve(rows * 10);
+    return TableSink{t};
+  });
+  // Concatenated in parallel: each part lands at its row and entry bases, its rows sharing
+  // their weights (a level has a few distinct rows, as the vertex tables do).
+  std::vector<size_t> row_base(chunks + 1, 0), entry_base(chunks + 1, 0);
+  for (size_t c = 0; c < chunks; ++c) {
+    row_base[c + 1] = row_base[c] + parts[c].size();
+    entry_base[c + 1] = entry_base[c] + parts[c].indices.size();
+  }
+  if (entry_base[chunks] > UINT32_MAX)
+    throw InputError("face-varying level needs more than 2^32 stencil entries");
   StencilTable t;
-  t.offsets.reserve(cs.value_count() + 1);
-  for (uint32_t f = 0; f < F; ++f) {
-    rules.face(f);
-    emit(t, rules.terms());
-  }
-  for (uint32_t e = 0; e < E; ++e) {
-    const uint32_t cb = cs.offsets[F + e], n = cs.offsets[F + e + 1] - cb;
-    const uint32_t x = P.edge_vertices[2 * size_t(e)], y = P.edge_vertices[2 * size_t(e) + 1];
-    if (!(cs.tag[cb] & kFvMismatch)) {
-      if (m.linear_all) {
-        emit(t, {{ids.end(e, x), 0.5}, {ids.end(e, y), 0.5}});
-      } else {
-        rules.edge(e);
-        emit(t, rules.terms());
+  t.offsets.resize(row_base[chunks] + 1);
+  t.weight_offsets.resize(row_base[chunks]);
+  t.indices.resize(entry_base[chunks]);
+  std::vector<std::vector<float>> pools(chunks);
+  parallel_range(chunks, 1, [&](size_t cb, size_t ce_) {
+    for (size_t c = cb; c < ce_; ++c) {
+      StencilTable& part = parts[c];
+      detail::SharedWeights shared;
+      for (size_t r = 0; r + 1 < part.offsets.size(); ++r) {
+        const uint32_t b = part.offsets[r], e = part.offsets[r + 1];
+        t.offsets[row_base[c] + r + 1] = uint32_t(entry_base[c] + e);
+        t.weight_offsets[row_base[c] + r] = shared.add(pools[c], part.weights.data() + b, e - b);
       }
-      continue;
+      std::copy(part.indices.begin(), part.indices.end(), t.indices.begin() + entry_base[c]);
+      part = StencilTable();
     }
-    for (uint32_t j = 0; j < n; ++j) {  // each side of a seam: its own midpoint
-      const uint32_t h = a.ec[a.eco[e] + j];
-      emit(t, {{ids.corner(h), 0.5}, {ids.corner(l.next(h)), 0.5}});
-    }
-  }
-  uint32_t end_values[2];
-  for (uint32_t v = 0; v < V; ++v) {
-    const uint32_t cb = cs.offsets[F + E + v], n = cs.offsets[F + E + v + 1] - cb;
-    if (n == 0) continue;
-    const uint32_t pb = ps.offsets[v];
-    if (!(cs.tag[cb] & kFvMismatch)) {
-      if (m.linear_all) {
-        emit(t, {{ids.id(pb), 1.0}});
-      } else {
-        rules.vertex(v);
-        emit(t, rules.terms());
-      }
-      continue;
-    }
-    for (uint32_t i = 0; i < n; ++i) {
-      if (m.linear_all || !(cs.tag[cb + i] & kFvCrease) || !spans.ends(v, pb + i, end_values)) {
-        emit(t, {{ids.id(pb + i), 1.0}});
-        continue;
-      }
-      double vw = 0.75, ew = 0.125;
-      const uint8_t ptag = ps.tag[pb + i];
-      if (ptag & kFvSemiSharp) {
-        // The fractional weight of the span whose sharpness this value follows.
-        const uint32_t from = (ptag & kFvDepSharp) ? pb + (1 - i) : pb + i;
-        spans.interior_sharpness(o, v, from, pe_scratch, ce_scratch);
-        const float pvs = P.vertex_sharpness[v];
-        const double wc = fractional_weight(o, pvs, decrement(pvs), pe_scratch.data(),
-                                            ce_scratch.data(), int(pe_scratch.size()));
-        vw = (1.0 - wc) * 0.75 + wc, ew = (1.0 - wc) * 0.125;
-      }
-      emit(t, {{ids.id(end_values[0]), ew}, {ids.id(end_values[1]), ew}, {ids.id(pb + i), vw}});
-    }
+  });
+  size_t pool_base = 0;
+  for (size_t c = 0; c < chunks; ++c) {
+    for (size_t r = row_base[c]; r < row_base[c + 1]; ++r)
+      t.weight_offsets[r] += uint32_t(pool_base);
+    t.weights.insert(t.weights.end(), pools[c].begin(), pools[c].end());
+    pool_base += pools[c].size();
   }
   return t;
+}
+
+std::vector<float> fvar_refine_apply(const SubdivOptions& o, const RefinedLevel& P, const Adj& a,
+                                     const FVarState& ps, FVarState& cs, const float* values,
+                                     int width) {
+  fvar_child_state(o, P, a, ps, cs);
+  std::vector<float> out(cs.value_count() * size_t(width));
+  for_child_chunks(o, P, a, ps, cs, [&](size_t, size_t first, size_t) {
+    return ApplySink{values, out.data(), width, cs.offsets[first]};
+  });
+  return out;
 }
 
 StencilTable fvar_limit(const SubdivOptions& o, const RefinedLevel& L, const Adj& a,

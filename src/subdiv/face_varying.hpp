@@ -44,6 +44,12 @@ FVarState fvar_cage_state(const SubdivOptions& o, const RefinedLevel& L0, const 
 StencilTable fvar_refine(const SubdivOptions& o, const RefinedLevel& P, const Adj& a,
                          const FVarState& parent, FVarState& child);
 
+// The same step applied at once to `width` (1-4) floats per parent value (the caller's
+// indices on the cage): returns the child level's values, with no table built.
+std::vector<float> fvar_refine_apply(const SubdivOptions& o, const RefinedLevel& P, const Adj& a,
+                                     const FVarState& parent, FVarState& child, const float* values,
+                                     int width);
+
 // Limit stencils of the values of level L (quads, adjacency a, channel s) over its values
 // (Far::PrimvarRefiner::LimitFaceVarying): matching vertices take their vertex's limit mask,
 // creases 2/3 of the value and 1/6 of each end, corners stay. Throws InputError on non-quads.

@@ -604,20 +604,27 @@ UniformRefinement refine_uniform(const Mesh& cage, int depth, const SubdivOption
       FaceVaryingLevels& out = r.face_varying[i];
       out.stencils.push_back(fvar_refine(options, P, a, fvar[i], child));
       out.value_counts.push_back(child.value_count());
-      out.corner_values.push_back(child.corner_value);
+      // Level k's corner values (the caller's, on the cage) are kept once the step has read them.
+      if (k > 0) out.corner_values[k] = std::move(fvar[i].corner_value);
+      out.corner_values.emplace_back();
       fvar[i] = std::move(child);
     }
     Adj ca;
     // The last level's adjacency only for face-varying limits.
-    const bool last = k + 1 == size_t(depth) && fvar.empty();
+    const bool want_limit =
+        std::any_of(face_varying.begin(), face_varying.end(), [](auto& c) { return c.limit; });
+    const bool last = k + 1 == size_t(depth) && !want_limit;
     derive_child(P, a, C, true, last ? nullptr : &ca);
     child_vertex_sharpness(P, all, C);
     derived_edge_sharpness(options, P, a, C);
     a = std::move(ca);
   }
   const bool quads = r.levels.back().face_offsets.back() == 4 * r.levels.back().face_count();
-  for (size_t i = 0; i < fvar.size() && quads; ++i)
-    r.face_varying[i].limit = fvar_limit(options, r.levels.back(), a, fvar[i]);
+  for (size_t i = 0; i < fvar.size(); ++i) {
+    if (face_varying[i].limit && quads)
+      r.face_varying[i].limit = fvar_limit(options, r.levels.back(), a, fvar[i]);
+    if (depth > 0) r.face_varying[i].corner_values[size_t(depth)] = std::move(fvar[i].corner_value);
+  }
   return r;
 }
 
@@ -712,10 +719,7 @@ Mesh subdivide_uniform(const Mesh& cage, int depth, const SubdivOptions& options
     colors.swap(next_colors);
     for (Carried& c : carried) {
       FVarState child;
-      const StencilTable t = fvar_refine(options, P, pa, c.state, child);
-      std::vector<float> v(t.size() * size_t(c.width));
-      apply_stencils(t, c.values.data(), v.data(), c.width);
-      c.values.swap(v);
+      c.values = fvar_refine_apply(options, P, pa, c.state, child, c.values.data(), c.width);
       c.state = std::move(child);
     }
     st.stencils_ms += ms_since(t0);

@@ -419,7 +419,7 @@ TEST_F(CliUv, UniformAndLimitWriteTheRefinedUvs) {
   const Mesh cage = read_mesh(car);
   ASSERT_FALSE(cage.uv_indices.empty());
   const SubdivOptions opt = subdiv_options(cage);
-  const FaceVaryingInput in{cage.uv_indices, cage.uvs.size() / 2};
+  const FaceVaryingInput in{cage.uv_indices, cage.uvs.size() / 2, true};
   const UniformRefinement r = refine_uniform(cage, 2, opt, {&in, 1});
   const FaceVaryingLevels& fl = r.face_varying[0];
   const std::vector<float> uv = fl.values(cage.uvs.data(), 2, 2);

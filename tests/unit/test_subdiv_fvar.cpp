@@ -117,7 +117,7 @@ Result compare_level(const Mesh& cage, const UniformRefinement& r, const test::O
 void check_cage(const Mesh& cage, int depth, FVarInterpolation mode) {
   SubdivOptions opt = subdiv_options(cage);
   opt.face_varying = mode;
-  const FaceVaryingInput in{cage.uv_indices, cage.uvs.size() / 2};
+  const FaceVaryingInput in{cage.uv_indices, cage.uvs.size() / 2, true};
   const UniformRefinement r = refine_uniform(cage, depth, opt, {&in, 1});
   const test::OsdFaceVarying o = test::osd_refine_uvs(cage, depth, opt);
   ASSERT_EQ(r.face_varying.size(), 1u);

@@ -95,6 +95,7 @@ struct RefinedLevel {
 struct FaceVaryingInput {
   std::span<const uint32_t> corner_values;
   size_t value_count = 0;
+  bool limit = false;  ///< also build limit stencils at the last level (FaceVaryingLevels::limit)
 };
 
 /// A face-varying channel through the levels of a refinement (OpenSubdiv's Far face-varying
@@ -106,7 +107,8 @@ struct FaceVaryingLevels {
   std::vector<size_t> value_counts;
   std::vector<StencilTable> stencils;
   /// Limit values at the last level (PrimvarRefiner::LimitFaceVarying): one row per value of
-  /// the last level, over those values. Empty when the last level is not all quads (depth 0).
+  /// the last level, over those values. Empty unless asked for (FaceVaryingInput::limit), or
+  /// when the last level is not all quads (depth 0).
   StencilTable limit;
   /// Values (`channels` floats each) of level `level`, from the cage's values. O(entries).
   std::vector<float> values(const float* cage_values, int channels, int level) const;

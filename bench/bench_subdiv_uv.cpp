@@ -1,0 +1,199 @@
+// Uniform subdivision with one UV channel, limn beside OpenSubdiv 3.5, each case in its own
+// child process (time and peak resident set; isolated.hpp):
+//   osd:       Far::TopologyRefinerFactory with one face-varying channel + RefineUniform +
+//              PrimvarRefiner::Interpolate and InterpolateFaceVarying level by level (its
+//              leanest way to a level's points and UVs), single-threaded;
+//   limn full: refine_uniform with the channel (every level, its stencils and its face-varying
+//              stencils kept) + the last level's positions and UVs;
+//   limn lean: subdivide_uniform (only the last level kept; carries the UVs).
+// And the same three without the channel, so the UVs' own cost shows. Models: the car and BigGuy
+// (their own UVs) and the 800k-quad terrain (planar UVs cut by a seam down the middle). Modes:
+// OpenSubdiv's default (linear all) and "none" (smooth UVs, the most work).
+// Times are the best of five runs below half a second. Usage: limn_bench_subdiv_uv [--cap-gb N]
+#include <fmt/format.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <string>
+#include <tuple>
+#include <utility>
+#include <vector>
+
+#include "isolated.hpp"
+#include "limn/io/mesh_io.hpp"
+#include "limn/mesh/shapes.hpp"
+#include "limn/subdiv/refine.hpp"
+
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wshadow"
+#pragma GCC diagnostic ignored "-Wconversion"
+#pragma GCC diagnostic ignored "-Wunused-parameter"
+#include <opensubdiv/far/primvarRefiner.h>
+#include <opensubdiv/far/topologyDescriptor.h>
+#include <opensubdiv/far/topologyRefinerFactory.h>
+#pragma GCC diagnostic pop
+
+namespace {
+
+using namespace OpenSubdiv;
+
+template <int N>
+struct Value {
+  float x[N] = {};
+  void Clear(void* = nullptr) {
+    for (float& v : x) v = 0;
+  }
+  void AddWithWeight(const Value& p, float w) {
+    for (int k = 0; k < N; ++k) x[k] += w * p.x[k];
+  }
+};
+
+size_t osd_run(const limn::Mesh& m, int level, limn::FVarInterpolation mode, bool uv) {
+  std::vector<int> nvpf(m.face_count());
+  for (size_t f = 0; f < m.face_count(); ++f) nvpf[f] = int(m.face_size(f));
+  const std::vector<int> idx(m.face_vertices.begin(), m.face_vertices.end());
+  const std::vector<int> uvi(m.uv_indices.begin(), m.uv_indices.end());
+  const std::vector<int> creases(m.crease_edges.begin(), m.crease_edges.end());
+  Far::TopologyDescriptor d;
+  d.numVertices = int(m.vertex_count());
+  d.numFaces = int(m.face_count());
+  d.numVertsPerFace = nvpf.data();
+  d.vertIndicesPerFace = idx.data();
+  d.numCreases = int(m.crease_sharpness.size());
+  d.creaseVertexIndexPairs = creases.data();
+  d.creaseWeights = m.crease_sharpness.data();
+  Far::TopologyDescriptor::FVarChannel ch;
+  ch.numValues = int(m.uvs.size() / 2);
+  ch.valueIndices = uvi.data();
+  if (uv) d.numFVarChannels = 1, d.fvarChannels = &ch;
+  Sdc::Options so;
+  so.SetVtxBoundaryInterpolation(Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER);
+  so.SetFVarLinearInterpolation(Sdc::Options::FVarLinearInterpolation(mode));
+  using Factory = Far::TopologyRefinerFactory<Far::TopologyDescriptor>;
+  std::unique_ptr<Far::TopologyRefiner> r(
+      Factory::Create(d, Factory::Options(Sdc::SCHEME_CATMARK, so)));
+  Far::TopologyRefiner::UniformOptions uo(level);
+  uo.fullTopologyInLastLevel = false;
+  r->RefineUniform(uo);
+  std::vector<Value<3>> p(m.vertex_count()), pn;
+  for (size_t v = 0; v < m.vertex_count(); ++v)
+    p[v] = {{m.positions[3 * v], m.positions[3 * v + 1], m.positions[3 * v + 2]}};
+  std::vector<Value<2>> t(m.uvs.size() / 2), tn;
+  for (size_t i = 0; i < t.size(); ++i) t[i] = {{m.uvs[2 * i], m.uvs[2 * i + 1]}};
+  const Far::PrimvarRefiner pr(*r);
+  for (int k = 1; k <= level; ++k) {
+    pn.assign(size_t(r->GetLevel(k).GetNumVertices()), {});
+    pr.Interpolate(k, p, pn);
+    p.swap(pn);
+    if (!uv) continue;
+    tn.assign(size_t(r->GetLevel(k).GetNumFVarValues(0)), {});
+    pr.InterpolateFaceVarying(k, t, tn, 0);
+    t.swap(tn);
+  }
+  return p.size() + (uv ? t.size() : 0);
+}
+
+size_t limn_full(const limn::Mesh& m, int level, limn::FVarInterpolation mode, bool uv) {
+  limn::SubdivOptions o = limn::subdiv_options(m);
+  o.face_varying = mode;
+  const limn::FaceVaryingInput in{m.uv_indices, m.uvs.size() / 2};
+  const limn::UniformRefinement r = limn::refine_uniform(m, level, o, {&in, uv ? 1u : 0u});
+  const size_t n = r.positions(m, level).size() / 3;
+  return n + (uv ? r.face_varying[0].values(m.uvs.data(), 2, level).size() / 2 : 0);
+}
+
+// `m` carries only what is measured: UVs or nothing (the lean path carries whatever it has).
+size_t limn_lean(const limn::Mesh& m, int level, limn::FVarInterpolation mode) {
+  limn::SubdivOptions o = limn::subdiv_options(m);
+  o.face_varying = mode;
+  const limn::Mesh out = limn::subdivide_uniform(m, level, o);
+  return out.vertex_count() + out.uvs.size() / 2;
+}
+
+// Planar UVs over the terrain, cut by a seam down the middle: faces right of it see the
+// middle column's vertices at UVs of their own.
+void terrain_uvs(limn::Mesh& m) {
+  const limn::Box b = limn::bounding_box(m);
+  const float mid = 0.5f * (b.min[0] + b.max[0]);
+  const size_t nv = m.vertex_count();
+  std::vector<uint32_t> second(nv, UINT32_MAX);
+  for (size_t v = 0; v < nv; ++v)
+    m.uvs.insert(m.uvs.end(), {(m.positions[3 * v] - b.min[0]) / (b.max[0] - b.min[0]),
+                               (m.positions[3 * v + 1] - b.min[1]) / (b.max[1] - b.min[1])});
+  for (size_t f = 0; f < m.face_count(); ++f) {
+    float cx = 0;
+    for (uint32_t v : m.face(f)) cx += m.positions[3 * size_t(v)] / float(m.face_size(f));
+    for (uint32_t v : m.face(f)) {
+      const bool on_seam =
+          std::fabs(m.positions[3 * size_t(v)] - mid) < 1e-4f * (b.max[0] - b.min[0]);
+      uint32_t id = v;
+      if (on_seam && cx > mid) {
+        if (second[v] == UINT32_MAX) {
+          second[v] = uint32_t(m.uvs.size() / 2);
+          m.uvs.insert(m.uvs.end(), {m.uvs[2 * v] + 0.01f, m.uvs[2 * v + 1]});
+        }
+        id = second[v];
+      }
+      m.uv_indices.push_back(id);
+    }
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  double cap_gb = 22;
+  for (int i = 1; i + 1 < argc; i += 2)
+    if (std::string(argv[i]) == "--cap-gb") cap_gb = std::atof(argv[i + 1]);
+  const std::filesystem::path models = LIMN_SHARED_MODELS;
+  std::vector<std::pair<std::string, int>> cases = {
+      {"osd/catmark_car.obj", 3}, {"quads/bigguy.obj", 3}, {"terrain", 2}};
+  fmt::print("{:<10} {:<5} {:<6} {:<12} {:>10} {:>9} {:>9}  {}\n", "model", "level", "uv", "who",
+             "values", "ms", "peak MB", "OpenSubdiv/limn");
+  for (const auto& [name, level] : cases) {
+    limn::Mesh m;
+    if (name == "terrain") {
+      m = limn::make_shape("terrain");
+      terrain_uvs(m);
+    } else {
+      if (!std::filesystem::exists(models / name)) continue;
+      m = limn::read_mesh(models / name);
+    }
+    // Only positions, tags and the UVs go in (BigGuy's normals would be a second channel).
+    m.normals.clear(), m.normal_indices.clear(), m.colors.clear();
+    limn::Mesh plain = m;
+    plain.uvs.clear(), plain.uv_indices.clear();
+    const std::string label = std::filesystem::path(name).stem().string();
+    for (const auto& [mode_name, mode, uv] :
+         {std::tuple{"-", limn::FVarInterpolation::all, false},
+          std::tuple{"all", limn::FVarInterpolation::all, true},
+          std::tuple{"none", limn::FVarInterpolation::none, true}}) {
+      limn::bench::Outcome osd;
+      for (const char* who : {"osd", "limn full", "limn lean"}) {
+        const std::string w = who;
+        const auto fn = [&, mode = mode, uv = uv]() -> size_t {
+          if (w == "osd") return osd_run(m, level, mode, uv);
+          if (w == "limn full") return limn_full(m, level, mode, uv);
+          return limn_lean(uv ? m : plain, level, mode);
+        };
+        // Small cases take milliseconds: the best of five runs (each in a fresh process).
+        limn::bench::Outcome o = limn::bench::run_isolated(fn, cap_gb);
+        for (int rep = 1; rep < (o.ms < 500 ? 5 : 1); ++rep) {
+          const limn::bench::Outcome again = limn::bench::run_isolated(fn, cap_gb);
+          if (again.ok && again.ms < o.ms) o.ms = again.ms;
+        }
+        if (w == "osd") osd = o;
+        std::string note = o.why;
+        if (o.ok && osd.ok && w != "osd")
+          note =
+              fmt::format("time {:.2f}x, memory {:.2f}x", osd.ms / o.ms, osd.peak_mb / o.peak_mb);
+        fmt::print("{:<10} {:<5} {:<6} {:<12} {:>10} {:>9.1f} {:>9.0f}  {}\n", label, level,
+                   mode_name, who, o.points, o.ms, o.peak_mb, note);
+        std::fflush(stdout);
+      }
+    }
+  }
+  return 0;
+}
