@@ -30,22 +30,24 @@ MeshFormat format_from_path(const std::filesystem::path& path) {
 namespace {
 
 MeshFormat sniff(std::string_view d) {
+  // Binary STL has no magic, but its size is exact; checked first because its free-form header
+  // may start with "solid", "OFF" or anything else. Text cannot match by chance: four text bytes
+  // read as a count of over 150 million triangles, which the size would have to equal exactly.
+  if (d.size() >= 84) {
+    uint32_t count;
+    std::memcpy(&count, d.data() + 80, 4);
+    if ((d.size() - 84) % 50 == 0 && (d.size() - 84) / 50 == count) return MeshFormat::stl;
+  }
   if (d.size() >= 3 && std::memcmp(d.data(), "\xEF\xBB\xBF", 3) == 0) d.remove_prefix(3);
   if (d.starts_with("ply") && d.size() > 3 && (d[3] == '\n' || d[3] == '\r'))
     return MeshFormat::ply;
   for (const char* m : {"OFF", "COFF", "NOFF", "CNOFF"})
     if (d.starts_with(m)) return MeshFormat::off;
   if (d.starts_with("glTF")) return MeshFormat::glb;
-  // Binary STL has no magic, but its size is exact; checked before any text test because its
-  // free-form header may start with "solid" or anything else.
-  if (d.size() >= 84) {
-    uint32_t count;
-    std::memcpy(&count, d.data() + 80, 4);
-    if ((d.size() - 84) % 50 == 0 && (d.size() - 84) / 50 == count) return MeshFormat::stl;
-  }
   const size_t text = d.find_first_not_of(" \t\r\n");
+  // glTF JSON: an object with an "asset" member, which writers may put after large arrays.
   if (text != std::string_view::npos && d[text] == '{' &&
-      d.substr(0, 4096).find("\"asset\"") != std::string_view::npos)
+      d.find("\"asset\"") != std::string_view::npos)
     return MeshFormat::gltf;
   if (text != std::string_view::npos && d.substr(text).starts_with("solid") &&
       d.substr(0, 4096).find("facet") != std::string_view::npos)
