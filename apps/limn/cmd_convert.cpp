@@ -1,4 +1,5 @@
-// limn convert: mesh format conversion (OBJ, PLY, OFF in; OBJ, PLY, OFF, GLB out).
+// limn convert: mesh format conversion (OBJ, PLY, OFF, STL, glTF/GLB in; OBJ, PLY, OFF, STL,
+// GLB out).
 #include <fmt/format.h>
 
 #include "common.hpp"
@@ -6,29 +7,46 @@
 namespace limn::cli {
 
 void add_convert(CLI::App& app) {
-  auto* cmd = app.add_subcommand("convert", "Convert a mesh between OBJ, PLY, OFF and binary glTF");
+  auto* cmd = app.add_subcommand(
+      "convert",
+      "Convert a mesh: OBJ, PLY, OFF, STL, glTF (.gltf/.glb) in; OBJ, PLY, OFF, STL, GLB out");
   struct Opts {
     std::string in, out, from, to;
-    bool ascii = false, json = false;
+    bool ascii = false, json = false, weld = false;
   };
   auto o = std::make_shared<Opts>();
-  cmd->add_option("IN", o->in, "Input mesh")->required();
-  cmd->add_option("OUT", o->out, "Output mesh (.obj, .ply, .off, .glb)")->required();
-  cmd->add_option("--from", o->from, "Input format, overriding the extension");
-  cmd->add_option("--to", o->to, "Output format, overriding the extension");
+  cmd->add_option("IN", o->in, "Input mesh (.obj, .ply, .off, .stl, .gltf, .glb)")->required();
+  cmd->add_option("OUT", o->out, "Output mesh (.obj, .ply, .off, .stl, .glb)")->required();
+  cmd->add_option("--from", o->from,
+                  "Input format, overriding the extension (obj, ply, off, stl, gltf, glb)");
+  cmd->add_option("--to", o->to,
+                  "Output format, overriding the extension (obj, ply, off, stl, glb)");
   cmd->add_flag("--ascii", o->ascii, "Write ascii PLY instead of binary little-endian");
+  cmd->add_flag("--weld", o->weld,
+                "glTF input: merge the vertices split at UV/normal seams into one cage vertex "
+                "(UVs and normals kept per corner); no effect on other formats");
   cmd->add_flag("--json", o->json, "Print one JSON object with counts and timings");
   cmd->callback([o] {
     Stopwatch sw;
     WriteOptions w;
     w.format = parse_format_option(o->to, "--to");
     w.ascii = o->ascii;
-    if (w.format == MeshFormat::automatic && format_from_path(o->out) == MeshFormat::automatic)
+    const MeshFormat out_format =
+        w.format == MeshFormat::automatic ? format_from_path(o->out) : w.format;
+    if (out_format == MeshFormat::automatic)
       throw InputError(
           fmt::format("{}: cannot tell the output format from the extension (use "
-                      ".obj, .ply, .off or .glb, or --to)",
+                      ".obj, .ply, .off, .stl or .glb, or --to)",
                       o->out));
-    const Mesh mesh = read_mesh(o->in, parse_format_option(o->from, "--from"));
+    if (out_format == MeshFormat::gltf)
+      throw InputError(fmt::format(
+          "{}: writing .gltf is not supported (limn writes binary glTF: use .glb)", o->out));
+    size_t dropped = 0;
+    ReadOptions r;
+    r.format = parse_format_option(o->from, "--from");
+    r.weld = o->weld;
+    r.dropped_degenerate = &dropped;
+    const Mesh mesh = read_mesh(o->in, r);
     const double t_read = sw.lap();
     write_mesh(mesh, o->out, w);
     const double t_write = sw.lap();
@@ -38,10 +56,12 @@ void add_convert(CLI::App& app) {
                           {"vertices", mesh.vertex_count()},
                           {"faces", mesh.face_count()},
                           {"timings_ms", {{"read", t_read}, {"write", t_write}}}};
+      if (dropped) j["dropped_degenerate_triangles"] = dropped;
       fmt::print("{}\n", j.dump(2));
     } else {
       fmt::print("{} -> {}: {} vertices, {} faces ({:.1f} ms)\n", o->in, o->out,
                  mesh.vertex_count(), mesh.face_count(), sw.ms());
+      if (dropped) fmt::print("dropped {} degenerate triangles on reading\n", dropped);
     }
   });
 }

@@ -13,7 +13,8 @@ MeshFormat parse_format_option(const std::string& value, const char* option) {
   if (value.empty()) return MeshFormat::automatic;
   const MeshFormat f = format_from_name(value);
   if (f == MeshFormat::automatic)
-    throw InputError(fmt::format("{}: unknown format '{}' (obj, ply, off, glb)", option, value));
+    throw InputError(
+        fmt::format("{}: unknown format '{}' (obj, ply, off, stl, gltf, glb)", option, value));
   return f;
 }
 

@@ -92,10 +92,13 @@ TEST_F(Cli, DirectoryAndMissingPaths) {
 }
 
 TEST_F(Cli, UnknownOutputExtensionIsBadUsage) {
-  const test::CliResult r =
-      limn("convert " + q(kData / "nonmanifold.obj") + " " + q(dir_ / "x.stl"));
-  EXPECT_EQ(r.code, 2);
-  EXPECT_EQ(files(), std::vector<std::string>{});
+  for (const char* name : {"x.xyz", "x.gltf"}) {
+    const test::CliResult r =
+        limn("convert " + q(kData / "nonmanifold.obj") + " " + q(dir_ / name));
+    EXPECT_EQ(r.code, 2) << name;
+    EXPECT_THAT(r.err, HasSubstr(name));
+    EXPECT_EQ(files(), std::vector<std::string>{});
+  }
 }
 
 TEST_F(Cli, NonManifoldIsReportedNotRejected) {
