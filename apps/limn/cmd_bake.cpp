@@ -17,7 +17,7 @@ namespace {
 struct BakeOpts {
   std::string texture, mesh, out, format, resolution;
   int size = 1024, gutter = 8;
-  bool nearest = false, json = false;
+  bool nearest = false, json = false, weld = false;
 };
 
 void run(const BakeOpts& o, CLI::App* cmd) {
@@ -56,7 +56,7 @@ void run(const BakeOpts& o, CLI::App* cmd) {
   Stopwatch sw;
   const OctreeTexture tex = load_lot(o.texture);
   const double t_tex = sw.lap();
-  Mesh mesh = read_mesh(o.mesh, parse_format_option(o.format, "--format"));
+  Mesh mesh = read_input(o.mesh, o.format, o.weld);
   const double t_mesh = sw.lap();
   BakeOptions bo;
   bo.filtered = !o.nearest;
@@ -121,7 +121,8 @@ void add_bake(CLI::App& app) {
       "bake", "Bake an octree texture into per-vertex colours or a UV texture PNG");
   auto o = std::make_shared<BakeOpts>();
   cmd->add_option("TEXTURE", o->texture, "Octree texture (.lot)")->required();
-  cmd->add_option("MESH", o->mesh, "Mesh to bake onto (OBJ, PLY, OFF)")->required();
+  cmd->add_option("MESH", o->mesh, "Mesh to bake onto (OBJ, PLY, OFF, STL, glTF/GLB)")->required();
+  add_weld_flag(*cmd, o->weld);
   cmd->add_option("-o,--output", o->out,
                   "Output: .ply/.glb/.obj/.off (vertex colours) or .png (needs the mesh's UVs)")
       ->required();

@@ -21,7 +21,7 @@ namespace {
 struct PaintOpts {
   std::string mesh, strokes, out, texture, stats, background = "0,0,0,0", format;
   int depth = 10;
-  bool json = false;
+  bool json = false, weld = false;
 };
 
 Rgba8 parse_color(const std::string& s, const char* option) {
@@ -89,7 +89,7 @@ void run_paint(const PaintOpts& o) {
   check_folder(o.out);
   const Rgba8 background = parse_color(o.background, "--background");
   Stopwatch sw;
-  const Mesh mesh = read_mesh(o.mesh, parse_format_option(o.format, "--format"));
+  const Mesh mesh = read_input(o.mesh, o.format, o.weld);
   const double t_read = sw.lap();
   const StrokeScript script = read_strokes(o.strokes, o.depth);
   const double t_parse = sw.lap();
@@ -171,7 +171,8 @@ void add_paint(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "paint", "Paint strokes onto a mesh into an adaptive octree texture (.lot), no UVs needed");
   auto o = std::make_shared<PaintOpts>();
-  cmd->add_option("MESH", o->mesh, "The mesh to paint (OBJ, PLY, OFF)");
+  cmd->add_option("MESH", o->mesh, "The mesh to paint (OBJ, PLY, OFF, STL, glTF/GLB)");
+  add_weld_flag(*cmd, o->weld);
   cmd->add_option("--strokes", o->strokes, "Stroke script (JSON; see docs/paint-strokes.md)");
   cmd->add_option("-o,--output", o->out, "Texture to write (.lot)");
   cmd->add_option("--depth", o->depth,

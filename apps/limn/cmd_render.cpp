@@ -19,15 +19,18 @@ void add_render(CLI::App& app) {
   auto* cmd = app.add_subcommand("render", "Render a mesh or its adaptive limit surface to PNG");
   struct Opts {
     std::string mesh, out, format, background = "1,1,1", texture;
-    bool adaptive = false, wireframe = false, flat = false, nearest = false, json = false;
+    bool adaptive = false, wireframe = false, flat = false, nearest = false, json = false,
+         weld = false;
     float uv_checker = 0.0f;
     int samples = 4;
     AdaptiveOpts a;
   };
   auto o = std::make_shared<Opts>();
-  cmd->add_option("MESH", o->mesh, "Mesh or control cage (OBJ with OpenSubdiv tags, PLY, OFF)")
+  cmd->add_option("MESH", o->mesh,
+                  "Mesh or control cage (OBJ with OpenSubdiv tags, PLY, OFF, STL, glTF/GLB)")
       ->required();
   cmd->add_option("-o,--output", o->out, "Output image (.png)")->required();
+  add_weld_flag(*cmd, o->weld);
   cmd->add_flag("--adaptive", o->adaptive,
                 "Draw the feature-adaptive limit surface (patches on the GPU), not the mesh");
   add_adaptive_options(*cmd, o->a, true);
@@ -89,7 +92,7 @@ void add_render(CLI::App& app) {
     check_adaptive(o->a, w, h);
 
     Stopwatch sw;
-    const Mesh mesh = read_mesh(o->mesh, parse_format_option(o->format, "--format"));
+    const Mesh mesh = read_input(o->mesh, o->format, o->weld);
     std::optional<OctreeTexture> texture;
     if (!o->texture.empty()) texture = load_lot(o->texture);
     nlohmann::json timings = {{"read", sw.lap()}};

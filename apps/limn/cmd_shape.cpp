@@ -16,7 +16,7 @@ void add_shape(CLI::App& app) {
   };
   auto o = std::make_shared<Opts>();
   cmd->add_option("NAME", o->name, fmt::format("Shape: {}", fmt::join(shape_names(), ", ")));
-  cmd->add_option("-o,--output", o->out, "Output mesh (.obj, .ply, .off, .glb)");
+  cmd->add_option("-o,--output", o->out, "Output mesh (.obj, .ply, .off, .stl, .glb)");
   cmd->add_option("--seed", o->seed, "Seed for the random placement of extraordinary vertices");
   cmd->add_flag("--list", o->list, "List the shape names");
   cmd->add_flag("--json", o->json, "Print one JSON object with counts and timings");

@@ -21,7 +21,7 @@ struct SimplifyOpts {
   double target_error = 0, split_threshold = 0.5;
   uint64_t seed = 1;
   size_t iterations = 30, teleports = 16;
-  bool polygons = false, json = false, no_fill = false;
+  bool polygons = false, json = false, no_fill = false, weld = false;
 };
 
 // The folder a file will be written into must exist before minutes of work are spent.
@@ -54,7 +54,7 @@ void run(const SimplifyOpts& o, CLI::App* cmd) {
   if (!o.labels.empty()) check_writable_folder(o.labels, "labels");
 
   Stopwatch sw;
-  const Mesh mesh = read_mesh(o.mesh, parse_format_option(o.format, "--format"));
+  const Mesh mesh = read_input(o.mesh, o.format, o.weld);
   const double t_read = sw.lap();
 
   VsaOptions vo;
@@ -193,9 +193,11 @@ void add_simplify(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "simplify", "Variational shape approximation: a few feature-aligned polygons (or triangles)");
   auto o = std::make_shared<SimplifyOpts>();
-  cmd->add_option("MESH", o->mesh, "Input mesh (OBJ, PLY, OFF); edge-manifold, oriented")
+  cmd->add_option("MESH", o->mesh,
+                  "Input mesh (OBJ, PLY, OFF, STL, glTF/GLB); edge-manifold, oriented")
       ->required();
-  cmd->add_option("-o,--output", o->out, "Output mesh (.obj, .ply, .off, .glb)")->required();
+  cmd->add_option("-o,--output", o->out, "Output mesh (.obj, .ply, .off, .stl, .glb)")->required();
+  add_weld_flag(*cmd, o->weld);
   cmd->add_option("--proxies", o->proxies,
                   "K, the number of clusters (polygons); default 100, or 10 to start from with "
                   "--target-error");

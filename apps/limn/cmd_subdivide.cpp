@@ -20,13 +20,13 @@ namespace limn::cli {
 namespace {
 
 void run_adaptive(const std::string& mesh, const std::string& out_path, const std::string& format,
-                  const AdaptiveOpts& a, bool json) {
+                  bool weld, const AdaptiveOpts& a, bool json) {
   if (format_from_path(out_path) == MeshFormat::automatic)
     throw InputError(fmt::format("{}: cannot tell the output format from the extension", out_path));
   int w = 1280, h = 720;
   check_adaptive(a, w, h);
   Stopwatch sw;
-  const Mesh cage = read_mesh(mesh, parse_format_option(format, "--format"));
+  const Mesh cage = read_input(mesh, format, weld);
   nlohmann::json timings = {{"read", sw.lap()}};
   const AdaptiveSurface surf = build_adaptive(cage, a, w, h, sw, timings);
   const bool dynamic = a.dynamic, measured = surf.measured;
@@ -118,12 +118,18 @@ void add_subdivide(CLI::App& app) {
   struct Opts {
     std::string mesh, out, format;
     int uniform = -1;
-    bool limit = false, json = false, adaptive = false;
+    bool limit = false, json = false, adaptive = false, weld = false;
     AdaptiveOpts a;
   };
   auto o = std::make_shared<Opts>();
-  cmd->add_option("MESH", o->mesh, "Control cage (OBJ with OpenSubdiv tags, PLY, OFF)")->required();
-  cmd->add_option("-o,--output", o->out, "Output mesh (.obj, .ply, .off, .glb)")->required();
+  cmd->add_option("MESH", o->mesh,
+                  "Control cage (OBJ with OpenSubdiv tags, PLY, OFF, STL, glTF/GLB)")
+      ->required();
+  cmd->add_option("-o,--output", o->out,
+                  "Output mesh: .obj (UVs, normals, colours, tags), .ply/.glb (UVs, normals, "
+                  "colours; seams split), .off/.stl (geometry only)")
+      ->required();
+  add_weld_flag(*cmd, o->weld);
   cmd->add_option("--uniform", o->uniform, "Refine every face L times (0-8)");
   cmd->add_flag("--limit", o->limit, "Push the points to the limit surface, with limit normals");
   cmd->add_flag("--adaptive", o->adaptive,
@@ -147,7 +153,7 @@ void add_subdivide(CLI::App& app) {
       if (cmd->count("--tess-px") && !(o->a.tess_px > 0 && std::isfinite(o->a.tess_px)))
         throw InputError(
             fmt::format("--tess-px {}: must be a positive number of pixels", o->a.tess_px));
-      run_adaptive(o->mesh, o->out, o->format, o->a, o->json);
+      run_adaptive(o->mesh, o->out, o->format, o->weld, o->a, o->json);
       return;
     }
     if (o->uniform < 0 || o->uniform > 8)
@@ -155,7 +161,7 @@ void add_subdivide(CLI::App& app) {
     if (format_from_path(o->out) == MeshFormat::automatic)
       throw InputError(fmt::format("{}: cannot tell the output format from the extension", o->out));
     Stopwatch sw;
-    const Mesh cage = read_mesh(o->mesh, parse_format_option(o->format, "--format"));
+    const Mesh cage = read_input(o->mesh, o->format, o->weld);
     const double t_read = sw.lap();
     // Every level multiplies corners by 4 (after the first, which makes one quad per corner).
     // The lean path needs ~70 bytes per output quad; with --limit every level, its stencils and

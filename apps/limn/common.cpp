@@ -18,6 +18,19 @@ MeshFormat parse_format_option(const std::string& value, const char* option) {
   return f;
 }
 
+Mesh read_input(const std::string& path, const std::string& format, bool weld) {
+  ReadOptions r;
+  r.format = parse_format_option(format, "--format");
+  r.weld = weld;
+  return read_mesh(path, r);
+}
+
+void add_weld_flag(CLI::App& cmd, bool& weld) {
+  cmd.add_flag("--weld", weld,
+               "glTF input: merge the vertices glTF splits at UV/normal seams into one cage "
+               "vertex (needed to subdivide or simplify a glTF mesh as one surface)");
+}
+
 nlohmann::json write_output(const Mesh& mesh, const std::string& path,
                             std::vector<std::string> lost, const WriteOptions& opt) {
   MeshFormat format = opt.format;

@@ -40,6 +40,12 @@ class Stopwatch {
   std::chrono::steady_clock::time_point t0_ = std::chrono::steady_clock::now(), lap_ = t0_;
 };
 
+/// Reads a command's input mesh: `format` from --format (empty: by extension, then content),
+/// `weld` from --weld (glTF: seams merged back into one cage vertex each).
+Mesh read_input(const std::string& path, const std::string& format, bool weld);
+/// Adds --weld to a command that reads a mesh.
+void add_weld_flag(CLI::App& cmd, bool& weld);
+
 /// `--format` values accepted for input/output overrides.
 MeshFormat parse_format_option(const std::string& value, const char* option);
 

@@ -121,7 +121,7 @@ Mesh read_mesh(const std::filesystem::path& path, MeshFormat format) {
 }
 
 std::vector<std::string> dropped_attributes(const Mesh& m, MeshFormat format) {
-  const bool geometry_only = format == MeshFormat::off;
+  const bool geometry_only = format == MeshFormat::off || format == MeshFormat::stl;
   const bool keeps_tags = format == MeshFormat::obj;
   std::vector<std::string> out;
   if (geometry_only && !m.uv_indices.empty()) out.emplace_back("uv");

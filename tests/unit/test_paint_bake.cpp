@@ -84,12 +84,17 @@ TEST(PaintBake, VertexColorsEqualTheLookupsAtTheVertices) {
     rgba8_to_float(want, f);
     for (int k = 0; k < 4; ++k) ASSERT_EQ(nb[4 * v + size_t(k)], f[k]);
   }
-  // Through the PLY writer and reader: 8-bit colours, the nearest value.
+  // Through the PLY writer and reader: 8-bit colours, the nearest value, at every corner (the
+  // writer splits spot's UV seams into separate vertices).
   Mesh coloured = m;
   coloured.colors = nb;
   const Mesh back = read_ply(write_mesh_memory(coloured, MeshFormat::ply), "baked.ply");
-  ASSERT_EQ(back.colors.size(), nb.size());
-  for (size_t i = 0; i < nb.size(); ++i) ASSERT_NEAR(back.colors[i], nb[i], 0.5f / 255.0f);
+  ASSERT_EQ(back.corner_count(), m.corner_count());
+  ASSERT_EQ(back.colors.size(), 4 * back.vertex_count());
+  for (size_t c = 0; c < m.corner_count(); ++c)
+    for (size_t k = 0; k < 4; ++k)
+      ASSERT_NEAR(back.colors[4 * back.face_vertices[c] + k], nb[4 * m.face_vertices[c] + k],
+                  0.5f / 255.0f);
 }
 
 TEST(PaintBake, UvTexelsEqualTheLookupsAndTheGutterIsFilled) {

@@ -104,7 +104,7 @@ void write_mesh(const Mesh& mesh, const std::filesystem::path& path, const Write
 /// alpha other than 1: OBJ keeps RGB), "creases", "corners", "holes", "tags" (OpenSubdiv scheme
 /// tags), in that order; empty when the file keeps everything. OBJ keeps all but alpha; PLY and
 /// GLB keep UVs, normals and colours (seams split into separate vertices) but no subdivision
-/// tags; OFF keeps geometry only. O(V + corners).
+/// tags; OFF and STL keep geometry only. O(V + corners).
 std::vector<std::string> dropped_attributes(const Mesh& mesh, MeshFormat format);
 
 /// Per-format writers (what write_mesh dispatches to), appending to `out`.
