@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# Every kind of GLB limn writes, checked by the Khronos glTF validator: shapes, a converted cage
+# with UV seams, uniform and adaptive subdivision, simplification with UVs, the demo's painted
+# bake. Zero errors allowed (warnings are printed).
+# Usage: validate.sh LIMN_CLI NODE_MODULES_DIR SHARED_MODELS_DIR
+set -euo pipefail
+limn=$1 modules=$2 models=$3
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+if [[ ! -f "$modules/gltf-validator/package.json" ]]; then
+  echo "glb-validate: $modules/gltf-validator is missing: run scripts/setup" >&2
+  exit 1
+fi
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+"$limn" shape cube -o "$work/cube.glb" >/dev/null
+"$limn" shape torus -o "$work/torus.glb" >/dev/null
+"$limn" demo --quick -o "$work/demo" >/dev/null 2>&1
+if [[ -d "$models/osd" ]]; then
+  car=$models/osd/catmark_car.obj bigguy=$models/quads/bigguy.obj
+  "$limn" convert "$car" "$work/car.glb" >/dev/null 2>&1
+  "$limn" subdivide "$car" -o "$work/car-uniform.glb" --uniform 2 >/dev/null 2>&1
+  "$limn" subdivide "$car" -o "$work/car-limit.glb" --uniform 2 --limit >/dev/null 2>&1
+  "$limn" subdivide "$bigguy" -o "$work/bigguy-adaptive.glb" --adaptive --depth 2 >/dev/null 2>&1
+  "$limn" simplify "$bigguy" -o "$work/bigguy-simplified.glb" --proxies 60 >/dev/null 2>&1
+  "$limn" convert "$models/tri/spot.obj" "$work/spot.glb" >/dev/null 2>&1
+fi
+mapfile -t files < <(find "$work" -name '*.glb' | sort)
+node "$here/validate.cjs" "$modules" "${files[@]}"
