@@ -44,9 +44,10 @@ void run_adaptive(const std::string& mesh, const std::string& out_path, const st
   to.depth_colors = a.depth_colors;
   const Mesh out = tessellate_patches(cage, table, points, to);
   timings["tessellate"] = sw.lap();
-  // Face-varying patches are not built yet: the adaptive surface carries positions only.
+  // UVs come along where they are linear (the default); face-varying patches for the other
+  // interpolation modes are not built yet.
   std::vector<std::string> lost;
-  if (!cage.uv_indices.empty()) lost.emplace_back("uv");
+  if (!cage.uv_indices.empty() && out.uv_indices.empty()) lost.emplace_back("uv");
   if (!cage.colors.empty() && out.colors.empty()) lost.emplace_back("colors");
   if (!cage.normal_indices.empty() && out.normal_indices.empty()) lost.emplace_back("normals");
   const nlohmann::json dropped = write_output(out, out_path, lost);

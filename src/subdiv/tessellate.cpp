@@ -68,6 +68,22 @@ class Tessellator {
   Key point(uint32_t p, int64_t i, int64_t j) const;
   Line patch_edge(const PatchParam& pp, int e, int64_t& length) const;
   uint32_t vertex(const Key& k, uint32_t patch, float s, float t);
+  // A vertex as one patch sees it: where along a patch edge (sorting), and its (s, t) there.
+  struct Sample {
+    double a;
+    uint32_t v;
+    float s, t;
+  };
+  // Appends triangle (x, y, z) of patch i, and its corners' (s, t) in that patch (for UVs).
+  void triangle(std::vector<uint32_t>& tris, uint32_t i, const Sample& x, const Sample& y,
+                const Sample& z) {
+    tris.insert(tris.end(), {x.v, y.v, z.v});
+    tri_patch_.push_back(i);
+    corner_st_.insert(corner_st_.end(), {x.s, x.t, y.s, y.t, z.s, z.t});
+  }
+  void face_varying(Mesh& out) const;
+  std::vector<uint32_t> tri_patch_;
+  std::vector<float> corner_st_;
 
   const Mesh& cage_;
   const PatchTable& t_;
@@ -238,12 +254,45 @@ void Tessellator::evaluate(std::vector<uint32_t> tris, Mesh& out) const {
     out.normals = normals_from_tangents(du, dv);
     out.normal_indices = out.face_vertices;
   }
+  face_varying(out);
   if (o_.depth_colors) {
     out.colors.resize(4 * nv);
     for (size_t v = 0; v < nv; ++v) {
       depth_color(param(coords_[v].patch).level, &out.colors[4 * v]);
       out.colors[4 * v + 3] = 1.0f;
     }
+  }
+}
+
+// The cage's UVs on every triangle corner, from the corner's place in its own patch (so a
+// vertex on a UV seam takes each side's value); equal values at a vertex are stored once. Only
+// linear channels (FVarInterpolation::all) have limit values without face-varying patches.
+void Tessellator::face_varying(Mesh& out) const {
+  if (cage_.uv_indices.empty() || t_.options.face_varying != FVarInterpolation::all) return;
+  const size_t nc = out.face_vertices.size();
+  std::vector<PtexCoord> at(nc);
+  for (size_t c = 0; c < nc; ++c)
+    at[c] = ptex_coord(t_, {tri_patch_[c / 3], corner_st_[2 * c], corner_st_[2 * c + 1]});
+  std::vector<float> uv(2 * nc);
+  const FaceVaryingInput in{cage_.uv_indices, cage_.uvs.size() / 2};
+  evaluate_linear_face_varying(cage_, in, cage_.uvs.data(), 2, at, uv.data());
+  // One value per distinct UV at each vertex (a handful at most: seams).
+  std::vector<std::vector<uint32_t>> at_vertex(out.vertex_count());
+  out.uv_indices.resize(nc);
+  for (size_t c = 0; c < nc; ++c) {
+    std::vector<uint32_t>& ids = at_vertex[out.face_vertices[c]];
+    uint32_t id = UINT32_MAX;
+    // Patches on both sides of an edge compute its points' UVs apart: equal to round-off.
+    for (uint32_t x : ids)
+      if (std::fabs(out.uvs[2 * x] - uv[2 * c]) <= 1e-6f &&
+          std::fabs(out.uvs[2 * x + 1] - uv[2 * c + 1]) <= 1e-6f)
+        id = x;
+    if (id == UINT32_MAX) {
+      id = uint32_t(out.uvs.size() / 2);
+      out.uvs.insert(out.uvs.end(), {uv[2 * c], uv[2 * c + 1]});
+      ids.push_back(id);
+    }
+    out.uv_indices[c] = id;
   }
 }
 
@@ -284,7 +333,7 @@ Mesh Tessellator::run() {
   Mesh out;
   std::vector<uint32_t> tris;
   std::vector<uint32_t> inner;
-  std::vector<std::pair<double, uint32_t>> side[4];  // (position along the edge 0..1, vertex)
+  std::vector<Sample> side[4];  // by position along the edge (0..1)
   static constexpr float kCs[4] = {0, 1, 1, 0}, kCt[4] = {0, 0, 1, 1};
   for (uint32_t i = 0; i < np; ++i) {
     const PatchParam& pp = param(i);
@@ -311,9 +360,10 @@ Mesh Tessellator::run() {
         } else {
           k = boundary_point(l.key, *it);
         }
-        side[e].emplace_back(a, vertex(k, i, s, t));
+        side[e].push_back({a, vertex(k, i, s, t), s, t});
       }
-      std::sort(side[e].begin(), side[e].end());
+      std::sort(side[e].begin(), side[e].end(),
+                [](const Sample& x, const Sample& y) { return x.a < y.a; });
     }
     // Interior grid of the patch (as fine as its finer opposite edges), then the four
     // stitching strips.
@@ -325,25 +375,27 @@ Mesh Tessellator::run() {
         inner[size_t(y) * w + size_t(x)] = uint32_t(coords_.size());
         coords_.push_back({i, float(x) / float(nu), float(y) / float(nv)});
       }
+    auto grid = [&](int x, int y) {
+      return Sample{0, inner[size_t(y) * w + size_t(x)], float(x) / float(nu),
+                    float(y) / float(nv)};
+    };
     for (int y = 1; y + 1 < nv; ++y)
       for (int x = 1; x + 1 < nu; ++x) {
-        const uint32_t a = inner[size_t(y) * w + size_t(x)],
-                       b = inner[size_t(y) * w + size_t(x) + 1];
-        const uint32_t c = inner[size_t(y + 1) * w + size_t(x) + 1],
-                       d = inner[size_t(y + 1) * w + size_t(x)];
-        tris.insert(tris.end(), {a, b, c, a, c, d});
+        const Sample a = grid(x, y), b = grid(x + 1, y), c = grid(x + 1, y + 1), d = grid(x, y + 1);
+        triangle(tris, i, a, b, c);
+        triangle(tris, i, a, c, d);
       }
     if (nu < 2 || nv < 2) {  // no interior grid: fan the boundary around the centre
-      const uint32_t centre = uint32_t(coords_.size());
+      const Sample centre{0, uint32_t(coords_.size()), 0.5f, 0.5f};
       coords_.push_back({i, 0.5f, 0.5f});
       for (int e = 0; e < 4; ++e)
         for (size_t k = 0; k + 1 < side[e].size(); ++k)
-          tris.insert(tris.end(), {side[e][k].second, side[e][k + 1].second, centre});
+          triangle(tris, i, side[e][k], side[e][k + 1], centre);
       continue;
     }
     for (int e = 0; e < 4; ++e) {
       // The inner row along edge e, from its start corner's side to its end's.
-      std::vector<std::pair<double, uint32_t>> row;
+      std::vector<Sample> row;
       const int m = e % 2 == 0 ? nu : nv;
       for (int k = 1; k < m; ++k) {
         int x = 0, y = 0;
@@ -361,18 +413,20 @@ Mesh Tessellator::run() {
             x = 1, y = nv - k;
             break;
         }
-        row.emplace_back(double(k) / m, inner[size_t(y) * w + size_t(x)]);
+        Sample r = grid(x, y);
+        r.a = double(k) / m;
+        row.push_back(r);
       }
       const auto& b = side[e];
       size_t p = 0, q = 0;
       while (p + 1 < b.size() || q + 1 < row.size()) {
         const bool advance_b =
-            q + 1 >= row.size() || (p + 1 < b.size() && b[p + 1].first <= row[q + 1].first);
+            q + 1 >= row.size() || (p + 1 < b.size() && b[p + 1].a <= row[q + 1].a);
         if (advance_b) {
-          tris.insert(tris.end(), {b[p].second, b[p + 1].second, row[q].second});
+          triangle(tris, i, b[p], b[p + 1], row[q]);
           ++p;
         } else {
-          tris.insert(tris.end(), {b[p].second, row[q + 1].second, row[q].second});
+          triangle(tris, i, b[p], row[q + 1], row[q]);
           ++q;
         }
       }

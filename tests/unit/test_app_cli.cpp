@@ -477,9 +477,18 @@ TEST_F(CliUv, WhatAnOutputCannotHoldIsNamed) {
   EXPECT_EQ(dropped, nlohmann::json({"uv", "creases", "corners"}));
   EXPECT_THAT(res.err, HasSubstr("warning"));
   EXPECT_THAT(res.err, HasSubstr("uv"));
-  // The adaptive surface has no face-varying patches yet: it says it drops the UVs.
+  // The adaptive surface carries linear UVs (the default); smooth ones need face-varying
+  // patches, not built yet: it says it drops them.
   res =
       limn("subdivide " + q(car) + " -o " + q(dir() / "car.obj") + " --adaptive --depth 1 --json");
+  ASSERT_EQ(res.code, 0) << res.err;
+  EXPECT_EQ(nlohmann::json::parse(res.out)["dropped"], nlohmann::json::array());
+  const Mesh adaptive = read_mesh(dir() / "car.obj");
+  EXPECT_EQ(adaptive.uv_indices.size(), adaptive.corner_count());
+  const fs::path smooth =
+      write("smooth.obj", slurp(car) + "\nt facevaryinginterpolateboundary 1/0/0 0\n");
+  res = limn("subdivide " + q(smooth) + " -o " + q(dir() / "smooth-out.obj") +
+             " --adaptive --depth 1 --json");
   ASSERT_EQ(res.code, 0) << res.err;
   EXPECT_EQ(nlohmann::json::parse(res.out)["dropped"], nlohmann::json({"uv"}));
 }

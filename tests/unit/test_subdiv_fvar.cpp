@@ -20,7 +20,9 @@
 
 #include "limn/io/mesh_io.hpp"
 #include "limn/mesh/shapes.hpp"
+#include "limn/subdiv/patches.hpp"
 #include "limn/subdiv/refine.hpp"
+#include "limn/subdiv/tessellate.hpp"
 #include "osd_oracle.hpp"
 #include "seam_cages.hpp"
 
@@ -215,6 +217,162 @@ TEST(FVarBuilt, TorusSeamsHaveAJunction) {
   size_t four = 0;
   for (const auto& [v, set] : values) four += set.size() == 4;
   EXPECT_EQ(four, 1u);
+}
+
+// Adaptive surfaces, linear channel (FVarInterpolation::all, OpenSubdiv's default): UVs at ptex
+// coordinates against OpenSubdiv's face-varying patch table (Far::PatchTableFactory with
+// generateFVarTables, its legacy linear patches over InterpolateFaceVarying's values at every
+// adaptive level, EvaluateBasisFaceVarying), values and derivatives.
+void check_adaptive_linear(const Mesh& cage, int depth) {
+  namespace osd = test::osd;
+  SubdivOptions opt = subdiv_options(cage);
+  opt.face_varying = FVarInterpolation::all;
+  auto refiner = test::osd_refiner(cage, opt, true);
+  osd::Far::PatchTableFactory::Options po(depth);
+  po.generateFVarTables = true;
+  po.SetEndCapType(osd::Far::PatchTableFactory::Options::ENDCAP_GREGORY_BASIS);
+  refiner->RefineAdaptive(po.GetRefineAdaptiveOptions());
+  std::unique_ptr<osd::Far::PatchTable> table(osd::Far::PatchTableFactory::Create(*refiner, po));
+  ASSERT_TRUE(table);
+  ASSERT_EQ(table->GetNumFVarChannels(), 1);
+  // Every level's values, one buffer (the patch table indexes them so).
+  std::vector<test::OsdUv> uv(size_t(refiner->GetNumFVarValuesTotal(0)));
+  for (size_t i = 0; i < cage.uvs.size() / 2; ++i) uv[i] = {cage.uvs[2 * i], cage.uvs[2 * i + 1]};
+  const osd::Far::PrimvarRefiner primvar(*refiner);
+  test::OsdUv* src = uv.data();
+  for (int k = 1; k <= refiner->GetMaxLevel(); ++k) {
+    test::OsdUv* dst = src + refiner->GetLevel(k - 1).GetNumFVarValues(0);
+    primvar.InterpolateFaceVarying(k, src, dst, 0);
+    src = dst;
+  }
+  ASSERT_EQ(table->GetLocalPointFaceVaryingStencilTable(0) == nullptr ||
+                table->GetLocalPointFaceVaryingStencilTable(0)->GetNumStencils() == 0,
+            true)
+      << "legacy linear face-varying patches need no local points";
+  const osd::Far::PatchMap map(*table);
+  const int nptex = osd::Far::PtexIndices(*refiner).GetNumFaces();
+  std::vector<PtexCoord> coords;
+  for (int p = 0; p < nptex; ++p)
+    for (float u : {0.0f, 0.13f, 0.5f, 0.77f, 1.0f})
+      for (float v : {0.0f, 0.31f, 0.5f, 0.94f}) coords.push_back({uint32_t(p), u, v});
+  std::vector<float> mine(2 * coords.size()), mdu(2 * coords.size()), mdv(2 * coords.size());
+  const FaceVaryingInput in{cage.uv_indices, cage.uvs.size() / 2};
+  evaluate_linear_face_varying(cage, in, cage.uvs.data(), 2, coords, mine.data(), mdu.data(),
+                               mdv.data());
+  std::vector<uint8_t> quad_ptex;
+  for (size_t f = 0; f < cage.face_count(); ++f)
+    quad_ptex.insert(quad_ptex.end(), cage.face_size(f) == 4 ? 1 : cage.face_size(f),
+                     cage.face_size(f) == 4);
+  double worst = 0, worst_d = 0;
+  size_t compared = 0;
+  std::string where;
+  for (size_t i = 0; i < coords.size(); ++i) {
+    const auto* h = map.FindPatch(int(coords[i].ptex), coords[i].u, coords[i].v);
+    if (!h) continue;  // a hole
+    float w[20], wu[20], wv[20];
+    table->EvaluateBasisFaceVarying(*h, coords[i].u, coords[i].v, w, wu, wv, nullptr, nullptr,
+                                    nullptr, 0);
+    const auto cvs = table->GetPatchFVarValues(*h, 0);
+    double t[2] = {0, 0}, tu[2] = {0, 0}, tv[2] = {0, 0};
+    for (int j = 0; j < cvs.size(); ++j) {
+      const test::OsdUv& x = uv[size_t(cvs[j])];
+      t[0] += w[j] * x.u, t[1] += w[j] * x.v;
+      tu[0] += wu[j] * x.u, tu[1] += wu[j] * x.v;
+      tv[0] += wv[j] * x.u, tv[1] += wv[j] * x.v;
+    }
+    ++compared;
+    for (size_t k = 0; k < 2; ++k) {
+      const double d = std::fabs(mine[2 * i + k] - t[k]);
+      if (d > worst) {
+        worst = d;
+        where = fmt::format("ptex {} ({}, {}): limn ({:.7g}, {:.7g}) osd ({:.7g}, {:.7g})",
+                            coords[i].ptex, coords[i].u, coords[i].v, mine[2 * i], mine[2 * i + 1],
+                            t[0], t[1]);
+      }
+      // limn differentiates per ptex unit; OpenSubdiv, on the corner faces of a non-quad, per
+      // unit of twice their size.
+      const double unit = quad_ptex[coords[i].ptex] ? 1.0 : 2.0;
+      worst_d = std::max({worst_d, std::fabs(unit * mdu[2 * i + k] - tu[k]),
+                          std::fabs(unit * mdv[2 * i + k] - tv[k])});
+    }
+  }
+  EXPECT_GT(compared, coords.size() / 3);
+  EXPECT_LE(worst, kTolerance) << where;
+  EXPECT_LE(worst_d, 1e-5);
+}
+
+class FVarAdaptive : public ::testing::TestWithParam<fs::path> {};
+
+TEST_P(FVarAdaptive, LinearUvsMatchOpenSubdivsPatches) {
+  const Mesh cage = read_mesh(GetParam());
+  check_adaptive_linear(cage, 3);
+}
+
+INSTANTIATE_TEST_SUITE_P(Models, FVarAdaptive, ::testing::ValuesIn(cages_with_uvs()),
+                         [](const ::testing::TestParamInfo<fs::path>& p) {
+                           std::string name = p.param.stem().string();
+                           for (char& c : name)
+                             if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+                           return name;
+                         });
+GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(FVarAdaptive);
+
+TEST(FVarAdaptiveBuilt, SeamCagesMatchOpenSubdivsPatches) {
+  for (const Mesh& cage : {test::cube_islands(), test::torus_seams(), test::dart_grid()})
+    check_adaptive_linear(cage, 4);
+}
+
+// Tessellated adaptive surfaces carry linear UVs. On a flat regular grid whose UVs are its
+// (x, y), the limit surface is the bilinear map itself (B-splines reproduce linear functions,
+// the boundary rule too), so every corner's UV must equal its vertex's position.
+TEST(FVarAdaptiveBuilt, TessellatedUvsFollowAFlatGrid) {
+  Mesh grid;
+  const int n = 4;
+  for (int y = 0; y <= n; ++y)
+    for (int x = 0; x <= n; ++x) grid.add_vertex(float(x), float(y), 0.0f);
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x) {
+      const uint32_t v = uint32_t((n + 1) * y + x);
+      grid.add_face({v, v + 1, v + uint32_t(n) + 2, v + uint32_t(n) + 1});
+    }
+  for (size_t v = 0; v < grid.vertex_count(); ++v)
+    grid.uvs.insert(grid.uvs.end(), {grid.positions[3 * v], grid.positions[3 * v + 1]});
+  grid.uv_indices = grid.face_vertices;
+  PatchOptions po;
+  po.subdiv = subdiv_options(grid);
+  po.depth = 2;
+  const PatchTable table = build_patches(grid, po);
+  TessellateOptions to;
+  to.factor = 5;
+  const Mesh out = tessellate_patches(grid, table, table.points(grid.positions), to);
+  ASSERT_EQ(out.uv_indices.size(), out.corner_count());
+  double worst = 0;
+  for (size_t c = 0; c < out.corner_count(); ++c)
+    for (size_t k = 0; k < 2; ++k)
+      worst = std::max(worst, double(std::fabs(out.uvs[2 * out.uv_indices[c] + k] -
+                                               out.positions[3 * out.face_vertices[c] + k])));
+  EXPECT_LE(worst, 1e-5);
+  // No seams on this grid: one UV per vertex.
+  EXPECT_EQ(out.uvs.size() / 2, out.vertex_count());
+  // A smooth channel is not carried (no face-varying patches yet).
+  po.subdiv.face_varying = FVarInterpolation::none;
+  const PatchTable smooth = build_patches(grid, po);
+  EXPECT_TRUE(tessellate_patches(grid, smooth, smooth.points(grid.positions), to).uvs.empty());
+}
+
+// On the seamed torus, a vertex on a seam carries one UV per side.
+TEST(FVarAdaptiveBuilt, TessellationKeepsSeams) {
+  const Mesh cage = test::torus_seams();
+  PatchOptions po;
+  po.subdiv = subdiv_options(cage);
+  po.depth = 2;
+  const PatchTable table = build_patches(cage, po);
+  TessellateOptions to;
+  to.factor = 2;
+  const Mesh out = tessellate_patches(cage, table, table.points(cage.positions), to);
+  ASSERT_EQ(out.uv_indices.size(), out.corner_count());
+  EXPECT_GT(out.uvs.size() / 2, out.vertex_count());
+  for (float x : out.uvs) EXPECT_TRUE(x >= -1e-6f && x <= 2.0f + 1e-6f);
 }
 
 // The lean path (subdivide_uniform) carries the UVs, per-corner normals (renormalised) and

@@ -174,6 +174,25 @@ class PatchMap {
   const PatchTable* table_;
 };
 
+/// A point of a ptex face: (u, v) in [0, 1]^2.
+struct PtexCoord {
+  uint32_t ptex = 0;
+  float u = 0, v = 0;
+};
+
+/// Where patch coordinate c lies on its ptex face. O(1).
+PtexCoord ptex_coord(const PatchTable& table, const PatchCoord& c);
+
+/// Face-varying values (UVs) interpolated linearly, FVarInterpolation::all (OpenSubdiv's default;
+/// its face-varying patches are then bilinear at every depth): over a cage quad, bilinear in its
+/// corners' values; over a non-quad face's corner ptex face, bilinear in that corner's value,
+/// the midpoints of its two edges and the face's mean. `width` (1-4) floats per value, indexed
+/// by channel.corner_values; du/dv (when not null) per ptex unit. Throws InputError for a ptex
+/// face out of range or a channel of the wrong size. O(log faces) per coordinate.
+void evaluate_linear_face_varying(const Mesh& cage, const FaceVaryingInput& channel,
+                                  const float* values, int width, std::span<const PtexCoord> coords,
+                                  float* out, float* du = nullptr, float* dv = nullptr);
+
 /// Evaluates limit positions (3 floats per coordinate) and, when du/dv are not null, the first
 /// derivatives with respect to the ptex face's u and v (patch-local derivatives scaled by
 /// 2^depth). `points` holds PatchTable::points(). Multi-threaded over coordinates (TBB).
