@@ -9,6 +9,7 @@
 // And the same three without the channel, so the UVs' own cost shows. Models: the car and BigGuy
 // (their own UVs) and the 800k-quad terrain (planar UVs cut by a seam down the middle). Modes:
 // OpenSubdiv's default (linear all) and "none" (smooth UVs, the most work).
+// Then feature-adaptive builds at depth 3 with and without the channel (osd_adaptive).
 // Times are the best of five runs below half a second. Usage: limn_bench_subdiv_uv [--cap-gb N]
 #include <fmt/format.h>
 
@@ -24,13 +25,16 @@
 #include "isolated.hpp"
 #include "limn/io/mesh_io.hpp"
 #include "limn/mesh/shapes.hpp"
+#include "limn/subdiv/patches.hpp"
 #include "limn/subdiv/refine.hpp"
 
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wshadow"
 #pragma GCC diagnostic ignored "-Wconversion"
 #pragma GCC diagnostic ignored "-Wunused-parameter"
+#include <opensubdiv/far/patchTableFactory.h>
 #include <opensubdiv/far/primvarRefiner.h>
+#include <opensubdiv/far/stencilTableFactory.h>
 #include <opensubdiv/far/topologyDescriptor.h>
 #include <opensubdiv/far/topologyRefinerFactory.h>
 #pragma GCC diagnostic pop
@@ -102,6 +106,69 @@ size_t limn_full(const limn::Mesh& m, int level, limn::FVarInterpolation mode, b
   const limn::UniformRefinement r = limn::refine_uniform(m, level, o, {&in, uv ? 1u : 0u});
   const size_t n = r.positions(m, level).size() / 3;
   return n + (uv ? r.face_varying[0].values(m.uvs.data(), 2, level).size() / 2 : 0);
+}
+
+// Feature-adaptive builds with the UV channel: OpenSubdiv's RefineAdaptive + PatchTableFactory
+// (Gregory-basis end caps, generateFVarTables: its default legacy linear face-varying patches)
+// and the UVs of every adaptive level; limn's build_patches and the patch points (linear UVs
+// need nothing more: evaluate_linear_face_varying reads the cage's).
+size_t osd_adaptive(const limn::Mesh& m, int depth, bool uv) {
+  std::vector<int> nvpf(m.face_count());
+  for (size_t f = 0; f < m.face_count(); ++f) nvpf[f] = int(m.face_size(f));
+  const std::vector<int> idx(m.face_vertices.begin(), m.face_vertices.end());
+  const std::vector<int> uvi(m.uv_indices.begin(), m.uv_indices.end());
+  const std::vector<int> creases(m.crease_edges.begin(), m.crease_edges.end());
+  Far::TopologyDescriptor d;
+  d.numVertices = int(m.vertex_count());
+  d.numFaces = int(m.face_count());
+  d.numVertsPerFace = nvpf.data();
+  d.vertIndicesPerFace = idx.data();
+  d.numCreases = int(m.crease_sharpness.size());
+  d.creaseVertexIndexPairs = creases.data();
+  d.creaseWeights = m.crease_sharpness.data();
+  Far::TopologyDescriptor::FVarChannel ch;
+  ch.numValues = int(m.uvs.size() / 2);
+  ch.valueIndices = uvi.data();
+  if (uv) d.numFVarChannels = 1, d.fvarChannels = &ch;
+  Sdc::Options so;
+  so.SetVtxBoundaryInterpolation(Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER);
+  using Factory = Far::TopologyRefinerFactory<Far::TopologyDescriptor>;
+  std::unique_ptr<Far::TopologyRefiner> r(
+      Factory::Create(d, Factory::Options(Sdc::SCHEME_CATMARK, so)));
+  Far::PatchTableFactory::Options po(depth);
+  po.SetEndCapType(Far::PatchTableFactory::Options::ENDCAP_GREGORY_BASIS);
+  po.generateFVarTables = uv;
+  r->RefineAdaptive(po.GetRefineAdaptiveOptions());
+  std::unique_ptr<Far::PatchTable> table(Far::PatchTableFactory::Create(*r, po));
+  std::unique_ptr<const Far::StencilTable> st;
+  {
+    Far::StencilTableFactory::Options so2;
+    so2.generateOffsets = true;
+    so2.generateIntermediateLevels = true;
+    st.reset(Far::StencilTableFactory::Create(*r, so2));
+  }
+  size_t n = table->GetNumPatchesTotal();
+  if (uv) {
+    std::vector<Value<2>> t(size_t(r->GetNumFVarValuesTotal(0)));
+    for (size_t i = 0; i < m.uvs.size() / 2; ++i) t[i] = {{m.uvs[2 * i], m.uvs[2 * i + 1]}};
+    const Far::PrimvarRefiner pr(*r);
+    Value<2>* src = t.data();
+    for (int k = 1; k <= r->GetMaxLevel(); ++k) {
+      Value<2>* dst = src + r->GetLevel(k - 1).GetNumFVarValues(0);
+      pr.InterpolateFaceVarying(k, src, dst, 0);
+      src = dst;
+    }
+    n += t.size();
+  }
+  return n + size_t(st->GetNumStencils());
+}
+
+size_t limn_adaptive(const limn::Mesh& m, int depth) {
+  limn::PatchOptions po;
+  po.subdiv = limn::subdiv_options(m);
+  po.depth = depth;
+  const limn::PatchTable t = limn::build_patches(m, po);
+  return t.patch_count() + t.points(m.positions).size() / 3;
 }
 
 // `m` carries only what is measured: UVs or nothing (the lean path carries whatever it has).
@@ -191,6 +258,37 @@ int main(int argc, char** argv) {
               fmt::format("time {:.2f}x, memory {:.2f}x", osd.ms / o.ms, osd.peak_mb / o.peak_mb);
         fmt::print("{:<10} {:<5} {:<6} {:<12} {:>10} {:>9.1f} {:>9.0f}  {}\n", label, level,
                    mode_name, who, o.points, o.ms, o.peak_mb, note);
+        std::fflush(stdout);
+      }
+    }
+  }
+  // Adaptive: depth 3 (OpenSubdiv's default isolation is 2-4 for drawing).
+  fmt::print("\n{:<10} {:<5} {:<6} {:<12} {:>10} {:>9} {:>9}  {}\n", "model", "depth", "uv", "who",
+             "count", "ms", "peak MB", "OpenSubdiv/limn");
+  for (const char* name : {"osd/catmark_car.obj", "quads/bigguy.obj"}) {
+    if (!std::filesystem::exists(models / name)) continue;
+    limn::Mesh m = limn::read_mesh(models / name);
+    m.normals.clear(), m.normal_indices.clear(), m.colors.clear();
+    const std::string label = std::filesystem::path(name).stem().string();
+    for (const bool uv : {false, true}) {
+      limn::bench::Outcome osd;
+      for (const char* who : {"osd", "limn"}) {
+        const std::string w = who;
+        const auto fn = [&]() -> size_t {
+          return w == "osd" ? osd_adaptive(m, 3, uv) : limn_adaptive(m, 3);
+        };
+        limn::bench::Outcome o = limn::bench::run_isolated(fn, cap_gb);
+        for (int rep = 1; rep < 5; ++rep) {
+          const limn::bench::Outcome again = limn::bench::run_isolated(fn, cap_gb);
+          if (again.ok && again.ms < o.ms) o.ms = again.ms;
+        }
+        if (w == "osd") osd = o;
+        std::string note = o.why;
+        if (o.ok && osd.ok && w != "osd")
+          note =
+              fmt::format("time {:.2f}x, memory {:.2f}x", osd.ms / o.ms, osd.peak_mb / o.peak_mb);
+        fmt::print("{:<10} {:<5} {:<6} {:<12} {:>10} {:>9.1f} {:>9.0f}  {}\n", label, 3,
+                   uv ? "linear" : "-", who, o.points, o.ms, o.peak_mb, note);
         std::fflush(stdout);
       }
     }
