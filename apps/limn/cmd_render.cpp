@@ -53,8 +53,6 @@ void add_render(CLI::App& app) {
                             "--tess-px", "--depth-colors"})
         if (cmd->count(a)) throw InputError(fmt::format("{} goes with --adaptive", a));
     if (o->adaptive && o->flat) throw InputError("--flat is for meshes, not --adaptive");
-    if (o->adaptive && cmd->count("--uv-checker"))
-      throw InputError("--uv-checker is for meshes (the adaptive surface carries no UVs yet)");
     if (cmd->count("--uv-checker") && !(o->uv_checker > 0 && o->uv_checker <= 1024))
       throw InputError(fmt::format("--uv-checker {}: squares per UV unit, 0-1024", o->uv_checker));
     if (o->nearest && o->texture.empty()) throw InputError("--nearest goes with --texture");
@@ -111,6 +109,12 @@ void add_render(CLI::App& app) {
     d.uv_checker = o->uv_checker;
     if (d.uv_checker > 0 && mesh.uv_indices.empty())
       throw InputError(fmt::format("{}: --uv-checker: the mesh has no UVs", o->mesh));
+    if (d.uv_checker > 0 && o->adaptive &&
+        subdiv_options(mesh).face_varying != FVarInterpolation::all)
+      throw InputError(fmt::format(
+          "{}: --uv-checker on the adaptive surface needs linear UVs (the default; this cage's "
+          "t facevaryinginterpolateboundary asks for smooth ones, not drawn adaptively yet)",
+          o->mesh));
     DrawStats st;
     nlohmann::json patches = nullptr;
     Camera cam;

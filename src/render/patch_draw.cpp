@@ -26,12 +26,13 @@ namespace {
 
 // Per-patch data, std430: the cage line of each patch edge (a cage edge, or past the cage edges
 // a cage face for edges inside one), level | boundary << 8 | transition << 12 | type << 16 |
-// crease edge << 18, and the crease's sharpness.
+// crease edge << 18 | depth << 20, the crease's sharpness, the ptex face and the patch's origin
+// there (u | v << 16).
 struct PatchInfo {
   uint32_t keys[4];
   uint32_t bits;
   float sharpness;
-  uint32_t pad[2];
+  uint32_t ptex, ptex_uv;
 };
 static_assert(sizeof(PatchInfo) == 32);
 
@@ -217,9 +218,11 @@ struct PatchDrawer::Impl {
   size_t regular = 0, gregory = 0, point_floats = 0;
   uint32_t max_index = 0;
   // The drawing programs (regular, end caps) of each combination of options, compiled at its
-  // first use: bit 0 an octree texture, bit 1 outlines, bit 2 depth colours.
-  std::array<std::array<gl::Program, 2>, 8> programs;
+  // first use: bit 0 an octree texture, bit 1 outlines, bit 2 depth colours, bit 3 UVs.
+  std::array<std::array<gl::Program, 2>, 16> programs;
   std::string vs16, vs20, tc16, tc20, te16, te20;
+  gl::Buffer ptex_uvs;  // 4 UVs per ptex face when the cage has linear UVs
+  bool has_uvs = false;
   gl::Program regular_capture, gregory_capture;  // transform feedback, no rasterisation
   gl::Buffer points, regular_cvs, gregory_cvs, infos, lines;
   size_t points_cap = 0, lines_cap = 0, regular_cap = 0, gregory_cap = 0, infos_cap = 0;
@@ -253,21 +256,31 @@ struct PatchDrawer::Impl {
 };
 
 const std::array<gl::Program, 2>& PatchDrawer::Impl::programs_for(const DrawOptions& o) {
-  const int flags = (o.texture ? 1 : 0) | (o.outline ? 2 : 0) | (o.depth_colors ? 4 : 0);
+  const bool uvs = o.uv_checker > 0 && has_uvs;
+  const int flags =
+      (o.texture ? 1 : 0) | (o.outline ? 2 : 0) | (o.depth_colors ? 4 : 0) | (uvs ? 8 : 0);
   std::array<gl::Program, 2>& p = programs[size_t(flags)];
   if (p[0].get()) return p;
-  const std::string defines = fmt::format("{}{}", o.outline ? "#define OUTLINE\n" : "",
-                                          o.depth_colors ? "#define DEPTH_COLORS\n" : "");
+  const std::string defines =
+      fmt::format("{}{}{}", o.outline ? "#define OUTLINE\n" : "",
+                  o.depth_colors ? "#define DEPTH_COLORS\n" : "", uvs ? "#define UVS\n" : "");
   const std::string fs = with_header(16, defines.c_str(), shaders::patch_info, shaders::shade,
                                      o.texture ? shaders::octree : shaders::no_octree) +
                          shaders::patch_frag;
+  // With UVs the evaluation stages compute them too (a define ahead of patch_eval).
+  const std::string te_regular = uvs ? with_header(16, "#define UVS\n", shaders::patch_info,
+                                                   shaders::patch_eval, shaders::patch_regular_tese)
+                                     : te16;
+  const std::string te_gregory = uvs ? with_header(20, "#define UVS\n", shaders::patch_info,
+                                                   shaders::patch_eval, shaders::patch_gregory_tese)
+                                     : te20;
   p[0] = gl::program("regular patches", {{GL_VERTEX_SHADER, vs16},
                                          {GL_TESS_CONTROL_SHADER, tc16},
-                                         {GL_TESS_EVALUATION_SHADER, te16},
+                                         {GL_TESS_EVALUATION_SHADER, te_regular},
                                          {GL_FRAGMENT_SHADER, fs}});
   p[1] = gl::program("end caps", {{GL_VERTEX_SHADER, vs20},
                                   {GL_TESS_CONTROL_SHADER, tc20},
-                                  {GL_TESS_EVALUATION_SHADER, te20},
+                                  {GL_TESS_EVALUATION_SHADER, te_gregory},
                                   {GL_FRAGMENT_SHADER, fs}});
   return p;
 }
@@ -278,6 +291,14 @@ PatchDrawer::PatchDrawer(const Mesh& cage, const PatchTable& table, std::span<co
   m.cage = &cage;
   m.topo = build_topology(cage);
   upload_patches(table);
+  // Linear UVs (the default mode) need only each ptex face's corners; others need face-varying
+  // patches, not built yet.
+  if (!cage.uv_indices.empty() && table.options.face_varying == FVarInterpolation::all) {
+    const FaceVaryingInput in{cage.uv_indices, cage.uvs.size() / 2};
+    const std::vector<float> uv = ptex_corner_values(cage, in, cage.uvs.data(), 2);
+    m.ptex_uvs = gl::buffer(uv.data(), uv.size() * sizeof(float));
+    m.has_uvs = true;
+  }
   m.vs16 = with_header(16, shaders::patch_vert), m.vs20 = with_header(20, shaders::patch_vert);
   m.tc16 = with_header(16, shaders::patch_info, shaders::patch_tesc),
   m.tc20 = with_header(20, shaders::patch_info, shaders::patch_tesc);
@@ -340,8 +361,10 @@ void PatchDrawer::upload_patches(const PatchTable& table) {
       }
       in.bits = uint32_t(pp.level) | uint32_t(pp.boundary & 0xF) << 8 |
                 uint32_t(pp.transition & 0xF) << 12 | uint32_t(pp.type) << 16 |
-                uint32_t(pp.crease_edge & 3) << 18;
+                uint32_t(pp.crease_edge & 3) << 18 | uint32_t(pp.depth & 31) << 20;
       in.sharpness = pp.sharpness;
+      in.ptex = pp.ptex;
+      in.ptex_uv = uint32_t(pp.u) | uint32_t(pp.v) << 16;
       infos.push_back(in);
     }
   m.max_index = 0;
@@ -416,6 +439,10 @@ DrawStats PatchDrawer::draw(const Camera& camera, const DrawOptions& o) {
     glUniform3fv(glGetUniformLocation(prog, "eye"), 1, camera.eye);
     glUniform3fv(glGetUniformLocation(prog, "base"), 1, o.color);
     glUniform3fv(glGetUniformLocation(prog, "ramp"), 17, ramp);
+    if (m.has_uvs && o.uv_checker > 0) {
+      glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, m.ptex_uvs.get());
+      glUniform1f(glGetUniformLocation(prog, "uv_checker"), o.uv_checker);
+    }
     if (o.texture) o.texture->bind(prog, o.texture_nearest ? 1 : 2);
     glPatchParameteri(GL_PATCH_VERTICES, cvs);
     // Patches whose faces are all out of view are left out.

@@ -658,3 +658,75 @@ TEST(Render, UvCheckerFollowsTheUvs) {
 
 }  // namespace
 }  // namespace limn
+
+namespace limn {
+namespace {
+
+// The GPU path draws linear UVs too: a flat grid whose UVs are its (x, y), its adaptive surface
+// drawn with one checker square per UV unit, is dark and light where the grid's squares are
+// (found by projecting their centres), and matches the CPU tessellation drawn as a mesh.
+TEST(Render, PatchUvCheckerFollowsTheUvs) {
+  context();
+  Mesh grid;
+  const int n = 4;
+  for (int y = 0; y <= n; ++y)
+    for (int x = 0; x <= n; ++x) grid.add_vertex(float(x) - 2.0f, float(y) - 2.0f, 0.0f);
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x) {
+      const uint32_t v = uint32_t((n + 1) * y + x);
+      grid.add_face({v, v + 1, v + uint32_t(n) + 2, v + uint32_t(n) + 1});
+    }
+  for (size_t v = 0; v < grid.vertex_count(); ++v)
+    grid.uvs.insert(grid.uvs.end(),
+                    {grid.positions[3 * v] + 2.0f, grid.positions[3 * v + 1] + 2.0f});
+  grid.uv_indices = grid.face_vertices;
+  PatchOptions po;
+  po.subdiv = subdiv_options(grid);
+  po.depth = 1;
+  const PatchTable table = build_patches(grid, po);
+  const std::vector<float> points = table.points(grid.positions);
+  Camera cam;
+  cam.eye[2] = 8.0f, cam.width = 200, cam.height = 200;
+  PatchDrawer drawer(grid, table, points);
+  RenderTarget target(200, 200, 1);
+  const float black[4] = {0, 0, 0, 1};
+  DrawOptions o;
+  o.uv_checker = 1.0f;
+  o.factor = 4;
+  target.begin(black);
+  drawer.draw(cam, o);
+  const std::vector<uint8_t> px = target.read_rgba();
+  auto brightness_at = [&](float u, float v) {
+    const float p[3] = {u - 2.0f, v - 2.0f, 0.0f};
+    double x = 0, y = 0;
+    EXPECT_TRUE(cam.project(p, x, y));
+    const uint8_t* c = &px[4 * (size_t(y) * 200 + size_t(x))];
+    return int(c[0]) + c[1] + c[2];
+  };
+  // Interior squares (the limit surface shrinks the boundary ones): (1,1), (2,2) light; (2,1),
+  // (1,2) dark.
+  const int a = brightness_at(1.5f, 1.5f), d = brightness_at(2.5f, 2.5f);
+  const int b = brightness_at(2.5f, 1.5f), c = brightness_at(1.5f, 2.5f);
+  EXPECT_LT(b, 0.75 * a);
+  EXPECT_LT(c, 0.75 * a);
+  EXPECT_LT(b, 0.75 * d);
+  EXPECT_LT(c, 0.75 * d);
+  // The CPU tessellation drawn as a mesh with the same checker: the same image but for
+  // rasterisation differences along the squares' borders.
+  TessellateOptions to;
+  to.factor = 4;
+  MeshDrawer cpu(tessellate_patches(grid, table, points, to));
+  target.begin(black);
+  cpu.draw(cam, o);
+  const std::vector<uint8_t> px2 = target.read_rgba();
+  size_t differ = 0, lit = 0;
+  for (size_t i = 0; i < px.size(); i += 4) {
+    lit += px[i] + px[i + 1] + px[i + 2] > 0;
+    differ += std::abs(int(px[i]) - int(px2[i])) + std::abs(int(px[i + 1]) - int(px2[i + 1])) > 40;
+  }
+  EXPECT_GT(lit, 1000u);
+  EXPECT_LT(differ, lit / 20);
+}
+
+}  // namespace
+}  // namespace limn

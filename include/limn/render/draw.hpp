@@ -36,8 +36,9 @@ struct DrawOptions {
   /// normal, over the base or depth colour; null: none.
   const GpuOctreeTexture* texture = nullptr;
   bool texture_nearest = false;  ///< nearest texel, not filtered (trilinear + mip by footprint)
-  /// Meshes with UVs: a checker of this many squares per UV unit, tinted by (u, v) so flips and
-  /// seams show; 0: off. Corners without UVs keep their colour.
+  /// A checker of this many squares per UV unit, tinted by (u, v) so flips and seams show; 0:
+  /// off. Meshes with UVs, and patch tables of cages with linear UVs (FVarInterpolation::all);
+  /// without UVs the colour stays.
   float uv_checker = 0.0f;
 };
 

@@ -193,6 +193,12 @@ void evaluate_linear_face_varying(const Mesh& cage, const FaceVaryingInput& chan
                                   const float* values, int width, std::span<const PtexCoord> coords,
                                   float* out, float* du = nullptr, float* dv = nullptr);
 
+/// The four corners of each ptex face's bilinear map that evaluate_linear_face_varying
+/// interpolates: per ptex face (PatchTable::ptex_of_face's order), the values at (0,0), (1,0),
+/// (1,1), (0,1), `width` floats each (what a GPU needs to draw linear UVs). O(corners).
+std::vector<float> ptex_corner_values(const Mesh& cage, const FaceVaryingInput& channel,
+                                      const float* values, int width);
+
 /// Evaluates limit positions (3 floats per coordinate) and, when du/dv are not null, the first
 /// derivatives with respect to the ptex face's u and v (patch-local derivatives scaled by
 /// 2^depth). `points` holds PatchTable::points(). Multi-threaded over coordinates (TBB).

@@ -14,12 +14,6 @@ void main() {
     edge = min(d.x, min(d.y, d.z));
   }
   vec3 base = t_col;
-  if (uv_checker > 0.0 && t_uv.z > 0.5) {
-    // Light and dark squares, tinted red along u and green along v within each unit square.
-    vec2 q = floor(t_uv.xy * uv_checker);
-    float dark = mod(q.x + q.y, 2.0);
-    vec3 tint = vec3(0.35 + 0.65 * fract(t_uv.x), 0.35 + 0.65 * fract(t_uv.y), 0.6);
-    base = tint * (dark > 0.5 ? 0.45 : 1.0);
-  }
+  if (uv_checker > 0.0 && t_uv.z > 0.5) base = uv_checker_color(t_uv.xy, uv_checker);
   frag = vec4(shade(oct_paint(base, t_pos, t_nrm), t_pos, t_nrm, eye, edge, outline), 1.0);
 }

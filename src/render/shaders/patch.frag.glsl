@@ -3,6 +3,10 @@ in vec3 t_pos;
 in vec3 t_nrm;
 in vec2 t_uv;
 flat in uint t_patch;
+#ifdef UVS
+in vec2 t_tex;
+uniform float uv_checker;
+#endif
 uniform vec3 eye;
 uniform vec3 base;
 uniform vec3 ramp[17];
@@ -16,6 +20,9 @@ const bool depth_colors = false;
 void main() {
   vec3 c = base;
   if (depth_colors) c = ramp[min(info[t_patch].bits & 0xFFu, 16u)];
+#ifdef UVS
+  c = uv_checker_color(t_tex, uv_checker);
+#endif
   c = oct_paint(c, t_pos, t_nrm);
   float edge = 1e9;
   if (outline) {

@@ -7,6 +7,14 @@ const bool outline = true;
 #else
 const bool outline = false;
 #endif
+// The --uv-checker colour at UV `uv`: light and dark squares, `n` per UV unit, tinted red along u
+// and green along v within each unit square (so flips and seams show).
+vec3 uv_checker_color(vec2 uv, float n) {
+  vec2 q = floor(uv * n);
+  float dark = mod(q.x + q.y, 2.0);
+  vec3 tint = vec3(0.35 + 0.65 * fract(uv.x), 0.35 + 0.65 * fract(uv.y), 0.6);
+  return tint * (dark > 0.5 ? 0.45 : 1.0);
+}
 vec3 shade(vec3 base, vec3 pos, vec3 nrm, vec3 eye, float edge, bool outline) {
   vec3 v = normalize(eye - pos);
   vec3 n = normalize(nrm);
