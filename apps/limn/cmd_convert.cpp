@@ -48,13 +48,14 @@ void add_convert(CLI::App& app) {
     r.dropped_degenerate = &dropped;
     const Mesh mesh = read_mesh(o->in, r);
     const double t_read = sw.lap();
-    write_mesh(mesh, o->out, w);
+    const nlohmann::json lost = write_output(mesh, o->out, {}, w);
     const double t_write = sw.lap();
     if (o->json) {
       nlohmann::json j = {{"input", o->in},
                           {"output", o->out},
                           {"vertices", mesh.vertex_count()},
                           {"faces", mesh.face_count()},
+                          {"dropped", lost},
                           {"timings_ms", {{"read", t_read}, {"write", t_write}}}};
       if (dropped) j["dropped_degenerate_triangles"] = dropped;
       fmt::print("{}\n", j.dump(2));
