@@ -17,6 +17,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <tuple>
 #include <utility>
@@ -27,21 +28,11 @@
 #include "limn/mesh/shapes.hpp"
 #include "limn/subdiv/patches.hpp"
 #include "limn/subdiv/refine.hpp"
-
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wshadow"
-#pragma GCC diagnostic ignored "-Wconversion"
-#pragma GCC diagnostic ignored "-Wunused-parameter"
-#include <opensubdiv/far/patchTableFactory.h>
-#include <opensubdiv/far/primvarRefiner.h>
-#include <opensubdiv/far/stencilTableFactory.h>
-#include <opensubdiv/far/topologyDescriptor.h>
-#include <opensubdiv/far/topologyRefinerFactory.h>
-#pragma GCC diagnostic pop
+#include "osd_bench.hpp"
 
 namespace {
 
-using namespace OpenSubdiv;
+using namespace OpenSubdiv::OPENSUBDIV_VERSION;
 
 template <int N>
 struct Value {
@@ -55,29 +46,7 @@ struct Value {
 };
 
 size_t osd_run(const limn::Mesh& m, int level, limn::FVarInterpolation mode, bool uv) {
-  std::vector<int> nvpf(m.face_count());
-  for (size_t f = 0; f < m.face_count(); ++f) nvpf[f] = int(m.face_size(f));
-  const std::vector<int> idx(m.face_vertices.begin(), m.face_vertices.end());
-  const std::vector<int> uvi(m.uv_indices.begin(), m.uv_indices.end());
-  const std::vector<int> creases(m.crease_edges.begin(), m.crease_edges.end());
-  Far::TopologyDescriptor d;
-  d.numVertices = int(m.vertex_count());
-  d.numFaces = int(m.face_count());
-  d.numVertsPerFace = nvpf.data();
-  d.vertIndicesPerFace = idx.data();
-  d.numCreases = int(m.crease_sharpness.size());
-  d.creaseVertexIndexPairs = creases.data();
-  d.creaseWeights = m.crease_sharpness.data();
-  Far::TopologyDescriptor::FVarChannel ch;
-  ch.numValues = int(m.uvs.size() / 2);
-  ch.valueIndices = uvi.data();
-  if (uv) d.numFVarChannels = 1, d.fvarChannels = &ch;
-  Sdc::Options so;
-  so.SetVtxBoundaryInterpolation(Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER);
-  so.SetFVarLinearInterpolation(Sdc::Options::FVarLinearInterpolation(mode));
-  using Factory = Far::TopologyRefinerFactory<Far::TopologyDescriptor>;
-  std::unique_ptr<Far::TopologyRefiner> r(
-      Factory::Create(d, Factory::Options(Sdc::SCHEME_CATMARK, so)));
+  const std::unique_ptr<Far::TopologyRefiner> r = limn::bench::osd_refiner(m, uv, mode);
   Far::TopologyRefiner::UniformOptions uo(level);
   uo.fullTopologyInLastLevel = false;
   r->RefineUniform(uo);
@@ -113,28 +82,7 @@ size_t limn_full(const limn::Mesh& m, int level, limn::FVarInterpolation mode, b
 // and the UVs of every adaptive level; limn's build_patches and the patch points (linear UVs
 // need nothing more: evaluate_linear_face_varying reads the cage's).
 size_t osd_adaptive(const limn::Mesh& m, int depth, bool uv) {
-  std::vector<int> nvpf(m.face_count());
-  for (size_t f = 0; f < m.face_count(); ++f) nvpf[f] = int(m.face_size(f));
-  const std::vector<int> idx(m.face_vertices.begin(), m.face_vertices.end());
-  const std::vector<int> uvi(m.uv_indices.begin(), m.uv_indices.end());
-  const std::vector<int> creases(m.crease_edges.begin(), m.crease_edges.end());
-  Far::TopologyDescriptor d;
-  d.numVertices = int(m.vertex_count());
-  d.numFaces = int(m.face_count());
-  d.numVertsPerFace = nvpf.data();
-  d.vertIndicesPerFace = idx.data();
-  d.numCreases = int(m.crease_sharpness.size());
-  d.creaseVertexIndexPairs = creases.data();
-  d.creaseWeights = m.crease_sharpness.data();
-  Far::TopologyDescriptor::FVarChannel ch;
-  ch.numValues = int(m.uvs.size() / 2);
-  ch.valueIndices = uvi.data();
-  if (uv) d.numFVarChannels = 1, d.fvarChannels = &ch;
-  Sdc::Options so;
-  so.SetVtxBoundaryInterpolation(Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER);
-  using Factory = Far::TopologyRefinerFactory<Far::TopologyDescriptor>;
-  std::unique_ptr<Far::TopologyRefiner> r(
-      Factory::Create(d, Factory::Options(Sdc::SCHEME_CATMARK, so)));
+  const std::unique_ptr<Far::TopologyRefiner> r = limn::bench::osd_refiner(m, uv);
   Far::PatchTableFactory::Options po(depth);
   po.SetEndCapType(Far::PatchTableFactory::Options::ENDCAP_GREGORY_BASIS);
   po.generateFVarTables = uv;
@@ -208,6 +156,24 @@ void terrain_uvs(limn::Mesh& m) {
   }
 }
 
+// Runs one case (small ones, taking milliseconds, as the best of five fresh processes) and
+// prints its row; OpenSubdiv's row comes first and is kept in `osd` for the ratios.
+void row(const std::string& label, int level, const char* uv, const std::string& who,
+         const std::function<size_t()>& fn, double cap_gb, limn::bench::Outcome& osd) {
+  limn::bench::Outcome o = limn::bench::run_isolated(fn, cap_gb);
+  for (int rep = 1; rep < (o.ms < 500 ? 5 : 1); ++rep) {
+    const limn::bench::Outcome again = limn::bench::run_isolated(fn, cap_gb);
+    if (again.ok && again.ms < o.ms) o.ms = again.ms;
+  }
+  if (who == "osd") osd = o;
+  std::string note = o.why;
+  if (o.ok && osd.ok && who != "osd")
+    note = fmt::format("time {:.2f}x, memory {:.2f}x", osd.ms / o.ms, osd.peak_mb / o.peak_mb);
+  fmt::print("{:<10} {:<5} {:<6} {:<12} {:>10} {:>9.1f} {:>9.0f}  {}\n", label, level, uv, who,
+             o.points, o.ms, o.peak_mb, note);
+  std::fflush(stdout);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -245,20 +211,7 @@ int main(int argc, char** argv) {
           if (w == "limn full") return limn_full(m, level, mode, uv);
           return limn_lean(uv ? m : plain, level, mode);
         };
-        // Small cases take milliseconds: the best of five runs (each in a fresh process).
-        limn::bench::Outcome o = limn::bench::run_isolated(fn, cap_gb);
-        for (int rep = 1; rep < (o.ms < 500 ? 5 : 1); ++rep) {
-          const limn::bench::Outcome again = limn::bench::run_isolated(fn, cap_gb);
-          if (again.ok && again.ms < o.ms) o.ms = again.ms;
-        }
-        if (w == "osd") osd = o;
-        std::string note = o.why;
-        if (o.ok && osd.ok && w != "osd")
-          note =
-              fmt::format("time {:.2f}x, memory {:.2f}x", osd.ms / o.ms, osd.peak_mb / o.peak_mb);
-        fmt::print("{:<10} {:<5} {:<6} {:<12} {:>10} {:>9.1f} {:>9.0f}  {}\n", label, level,
-                   mode_name, who, o.points, o.ms, o.peak_mb, note);
-        std::fflush(stdout);
+        row(label, level, mode_name, who, fn, cap_gb, osd);
       }
     }
   }
@@ -277,19 +230,7 @@ int main(int argc, char** argv) {
         const auto fn = [&]() -> size_t {
           return w == "osd" ? osd_adaptive(m, 3, uv) : limn_adaptive(m, 3);
         };
-        limn::bench::Outcome o = limn::bench::run_isolated(fn, cap_gb);
-        for (int rep = 1; rep < 5; ++rep) {
-          const limn::bench::Outcome again = limn::bench::run_isolated(fn, cap_gb);
-          if (again.ok && again.ms < o.ms) o.ms = again.ms;
-        }
-        if (w == "osd") osd = o;
-        std::string note = o.why;
-        if (o.ok && osd.ok && w != "osd")
-          note =
-              fmt::format("time {:.2f}x, memory {:.2f}x", osd.ms / o.ms, osd.peak_mb / o.peak_mb);
-        fmt::print("{:<10} {:<5} {:<6} {:<12} {:>10} {:>9.1f} {:>9.0f}  {}\n", label, 3,
-                   uv ? "linear" : "-", who, o.points, o.ms, o.peak_mb, note);
-        std::fflush(stdout);
+        row(label, 3, uv ? "linear" : "-", who, fn, cap_gb, osd);
       }
     }
   }

@@ -28,8 +28,10 @@ namespace limn::bench {
 
 namespace osd = OpenSubdiv::OPENSUBDIV_VERSION;
 
-/// An unrefined OpenSubdiv refiner for `m` (creases, corners, holes, boundary and crease rules).
-inline std::unique_ptr<osd::Far::TopologyRefiner> osd_refiner(const Mesh& m) {
+/// An unrefined OpenSubdiv refiner for `m` (creases, corners, holes, boundary and crease rules),
+/// with its UVs as face-varying channel 0 under `fvar` when `uvs`.
+inline std::unique_ptr<osd::Far::TopologyRefiner> osd_refiner(
+    const Mesh& m, bool uvs = false, FVarInterpolation fvar = FVarInterpolation::all) {
   std::vector<int> nvpf, idx(m.face_vertices.begin(), m.face_vertices.end());
   std::vector<int> creases(m.crease_edges.begin(), m.crease_edges.end());
   std::vector<int> corners(m.corner_vertices.begin(), m.corner_vertices.end());
@@ -48,7 +50,13 @@ inline std::unique_ptr<osd::Far::TopologyRefiner> osd_refiner(const Mesh& m) {
   d.cornerWeights = m.corner_sharpness.data();
   d.numHoles = int(holes.size());
   d.holeIndices = holes.data();
+  const std::vector<int> uv_idx(m.uv_indices.begin(), m.uv_indices.end());
+  osd::Far::TopologyDescriptor::FVarChannel channel;
+  channel.numValues = int(m.uvs.size() / 2);
+  channel.valueIndices = uv_idx.data();
+  if (uvs) d.numFVarChannels = 1, d.fvarChannels = &channel;
   osd::Sdc::Options so;
+  so.SetFVarLinearInterpolation(osd::Sdc::Options::FVarLinearInterpolation(fvar));
   const SubdivOptions lo = subdiv_options(m);
   so.SetVtxBoundaryInterpolation(lo.boundary == BoundaryInterpolation::edge_only
                                      ? osd::Sdc::Options::VTX_BOUNDARY_EDGE_ONLY

@@ -42,11 +42,7 @@ void add_convert(CLI::App& app) {
       throw InputError(fmt::format(
           "{}: writing .gltf is not supported (limn writes binary glTF: use .glb)", o->out));
     size_t dropped = 0;
-    ReadOptions r;
-    r.format = parse_format_option(o->from, "--from");
-    r.weld = o->weld;
-    r.dropped_degenerate = &dropped;
-    const Mesh mesh = read_mesh(o->in, r);
+    const Mesh mesh = read_input(o->in, o->from, o->weld, &dropped, "--from");
     const double t_read = sw.lap();
     const nlohmann::json lost = write_output(mesh, o->out, {}, w);
     const double t_write = sw.lap();

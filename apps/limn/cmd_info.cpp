@@ -23,11 +23,7 @@ void add_info(CLI::App& app) {
   cmd->callback([o] {
     Stopwatch sw;
     size_t dropped = 0;
-    ReadOptions r;
-    r.format = parse_format_option(o->format, "--format");
-    r.weld = o->weld;
-    r.dropped_degenerate = &dropped;
-    const Mesh mesh = read_mesh(o->mesh, r);
+    const Mesh mesh = read_input(o->mesh, o->format, o->weld, &dropped);
     const double t_read = sw.lap();
     const Topology topo = build_topology(mesh);
     const double t_topo = sw.lap();

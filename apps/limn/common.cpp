@@ -18,10 +18,12 @@ MeshFormat parse_format_option(const std::string& value, const char* option) {
   return f;
 }
 
-Mesh read_input(const std::string& path, const std::string& format, bool weld) {
+Mesh read_input(const std::string& path, const std::string& format, bool weld,
+                size_t* dropped_degenerate, const char* format_option) {
   ReadOptions r;
-  r.format = parse_format_option(format, "--format");
+  r.format = parse_format_option(format, format_option);
   r.weld = weld;
+  r.dropped_degenerate = dropped_degenerate;
   return read_mesh(path, r);
 }
 

@@ -40,9 +40,11 @@ class Stopwatch {
   std::chrono::steady_clock::time_point t0_ = std::chrono::steady_clock::now(), lap_ = t0_;
 };
 
-/// Reads a command's input mesh: `format` from --format (empty: by extension, then content),
-/// `weld` from --weld (glTF: seams merged back into one cage vertex each).
-Mesh read_input(const std::string& path, const std::string& format, bool weld);
+/// Reads a command's input mesh: `format` from the option named `format_option` (empty: by
+/// extension, then content), `weld` from --weld (glTF: seams merged back into one cage vertex
+/// each); `dropped_degenerate` (optional) receives the triangles dropped for repeating a vertex.
+Mesh read_input(const std::string& path, const std::string& format, bool weld,
+                size_t* dropped_degenerate = nullptr, const char* format_option = "--format");
 /// Adds --weld to a command that reads a mesh.
 void add_weld_flag(CLI::App& cmd, bool& weld);
 

@@ -11,6 +11,7 @@
 #include <cstring>
 #include <filesystem>
 
+#include "bad_input.hpp"
 #include "limn/io/mesh_io.hpp"
 #include "limn/mesh/shapes.hpp"
 #include "limn/mesh/topology.hpp"
@@ -89,16 +90,8 @@ void expect_closed_cube(const Mesh& m) {
 
 template <class... S>
 void expect_bad(std::string_view data, S... fragments) {
-  try {
-    read_stl(data, "bad.stl");
-    FAIL() << "accepted bad input";
-  } catch (const InputError& e) {
-    const std::string msg = e.what();
-    EXPECT_THAT(msg, HasSubstr("bad.stl: "));
-    for (const std::string_view f : {std::string_view(fragments)...})
-      EXPECT_THAT(msg, HasSubstr(std::string(f)));
-    EXPECT_EQ(msg.find('\n'), std::string::npos) << "message must be one line: " << msg;
-  }
+  test::expect_bad_input([](std::string_view d, std::string_view n) { return read_stl(d, n); },
+                         data, "bad.stl", fragments...);
 }
 
 TEST(Stl, AsciiCubeWeldsIntoAClosedMesh) {
