@@ -80,6 +80,8 @@ nlohmann::json stats_json(const MeshStats& s) {
       {"surface_area", s.surface_area},
       {"has_normals", s.has_normals},
       {"has_uvs", s.has_uvs},
+      {"uv_values", s.uv_values},
+      {"uv_seam_edges", s.uv_seam_edges},
       {"has_colors", s.has_colors},
   };
   if (s.bbox.empty()) {
@@ -124,9 +126,10 @@ std::string stats_text(const MeshStats& s) {
         "bbox            [{:.6g} {:.6g} {:.6g}] - [{:.6g} {:.6g} {:.6g}] (diag {:.6g})\n",
         s.bbox.min[0], s.bbox.min[1], s.bbox.min[2], s.bbox.max[0], s.bbox.max[1], s.bbox.max[2],
         s.bbox.diagonal());
+  const std::string uvs =
+      s.has_uvs ? fmt::format("{} values, {} seam edges", s.uv_values, s.uv_seam_edges) : "no";
   out += fmt::format("attributes      normals: {}, uvs: {}, colours: {}\n",
-                     s.has_normals ? "yes" : "no", s.has_uvs ? "yes" : "no",
-                     s.has_colors ? "yes" : "no");
+                     s.has_normals ? "yes" : "no", uvs, s.has_colors ? "yes" : "no");
   return out;
 }
 

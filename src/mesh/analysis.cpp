@@ -39,6 +39,16 @@ MeshStats analyze(const Mesh& mesh, const Topology& topo) {
   s.bbox = bounding_box(mesh);
   s.has_normals = !mesh.normal_indices.empty();
   s.has_uvs = !mesh.uv_indices.empty();
+  if (s.has_uvs) {
+    s.uv_values = mesh.uvs.size() / 2;
+    const uint32_t* uv = mesh.uv_indices.data();
+    for (uint32_t c = 0; c < mesh.corner_count(); ++c) {
+      const uint32_t t = topo.corner_twin[c];
+      if (t >= kNonManifold || t < c) continue;  // boundary, non-manifold, or counted from t
+      const uint32_t cn = topo.corner_next[c], tn = topo.corner_next[t];
+      s.uv_seam_edges += uv[c] != uv[tn] || uv[cn] != uv[t];
+    }
+  }
   s.has_colors = !mesh.colors.empty();
 
   std::map<uint32_t, size_t> arity;

@@ -635,10 +635,11 @@ StencilTable fvar_limit(const SubdivOptions& o, const RefinedLevel& L, const Adj
       }
       masks.compute(v, P, T1, T2);
       T1.terms.clear(), T2.terms.clear();
-      for (auto& [w, weight] : P.terms) {
+      for (auto& term : P.terms) {
+        const uint32_t w = term.first;
         const auto it =
-            std::find_if(near.begin(), near.end(), [&](const auto& p) { return p.first == w; });
-        w = id(it->second);
+            std::find_if(near.begin(), near.end(), [w](const auto& p) { return p.first == w; });
+        term.first = id(it->second);
       }
       P.emit(t);
       continue;

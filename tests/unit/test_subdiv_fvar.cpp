@@ -20,6 +20,7 @@
 
 #include "limn/io/mesh_io.hpp"
 #include "limn/mesh/shapes.hpp"
+#include "limn/mesh/topology.hpp"
 #include "limn/subdiv/patches.hpp"
 #include "limn/subdiv/refine.hpp"
 #include "limn/subdiv/tessellate.hpp"
@@ -432,6 +433,42 @@ TEST(FVarLean, CarriesWhatRefineUniformComputes) {
       }
     }
   }
+}
+
+}  // namespace
+}  // namespace limn
+
+namespace limn {
+namespace {
+
+// limn info's seam count: the cube of six islands has every edge a seam; the seamed torus's
+// seams are its two cut circles; a cage with one UV per vertex has none.
+TEST(FVarInfo, SeamEdgesAreCounted) {
+  const Mesh cube = test::cube_islands();
+  EXPECT_EQ(analyze(cube, build_topology(cube)).uv_seam_edges, 12u);
+  EXPECT_EQ(analyze(cube, build_topology(cube)).uv_values, 24u);
+  const Mesh torus = test::torus_seams();
+  const MeshStats ts = analyze(torus, build_topology(torus));
+  // Brute force: edges (as vertex pairs) whose faces see different UVs at an end.
+  std::map<std::pair<uint32_t, uint32_t>, std::vector<std::pair<uint32_t, uint32_t>>> sides;
+  for (size_t f = 0; f < torus.face_count(); ++f) {
+    const uint32_t b = torus.face_offsets[f], n = torus.face_size(f);
+    for (uint32_t i = 0; i < n; ++i) {
+      const uint32_t c = b + i, d = b + (i + 1) % n;
+      uint32_t x = torus.face_vertices[c], y = torus.face_vertices[d];
+      uint32_t ux = torus.uv_indices[c], uy = torus.uv_indices[d];
+      if (x > y) std::swap(x, y), std::swap(ux, uy);
+      sides[{x, y}].push_back({ux, uy});
+    }
+  }
+  size_t seams = 0;
+  for (const auto& [e, s] : sides) seams += s.size() == 2 && s[0] != s[1];
+  EXPECT_EQ(ts.uv_seam_edges, seams);
+  EXPECT_GT(seams, 0u);
+  Mesh plain = make_cube();
+  plain.uvs.assign(2 * plain.vertex_count(), 0.5f);
+  plain.uv_indices = plain.face_vertices;
+  EXPECT_EQ(analyze(plain, build_topology(plain)).uv_seam_edges, 0u);
 }
 
 }  // namespace

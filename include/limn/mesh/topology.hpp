@@ -59,6 +59,8 @@ struct MeshStats {
   Box bbox;
   double surface_area = 0;
   bool has_normals = false, has_uvs = false, has_colors = false;
+  size_t uv_values = 0;      ///< distinct UV entries (the file's `vt`)
+  size_t uv_seam_edges = 0;  ///< manifold edges whose two faces disagree on a UV index at an end
 };
 
 /// Structural analysis in O(corners + V) after build_topology. A vertex is extraordinary for
