@@ -254,19 +254,17 @@ void ring_corners(const LevelRef& l, bool non_manifold, uint32_t v, std::vector<
   const Adj& a = l.a;
   out.clear();
   const uint32_t b = a.vco[v], n = a.vco[v + 1] - b;
-  if (n == 0) return;
-  uint32_t c = a.vc[b];
-  if (!non_manifold) {
-    for (uint32_t i = b; i < b + n; ++i)
-      if (a.edge_face_count(a.corner_edge[a.vc[i]]) == 1) {
-        c = a.vc[i];
-        break;
-      }
-  }
   if (non_manifold) {
     out.assign(a.vc.begin() + b, a.vc.begin() + b + n);
     return;
   }
+  if (n == 0) return;
+  uint32_t c = a.vc[b];
+  for (uint32_t i = b; i < b + n; ++i)
+    if (a.edge_face_count(a.corner_edge[a.vc[i]]) == 1) {
+      c = a.vc[i];
+      break;
+    }
   for (uint32_t i = 0; i < n; ++i) {
     out.push_back(c);
     const uint32_t e = a.corner_edge[l.prev(c)];
@@ -372,16 +370,20 @@ void child_rows(const SubdivOptions& o, const Mode& m, const RefinedLevel& P, co
 
 }  // namespace
 
+void check_face_varying(const FaceVaryingInput& channel, size_t corners) {
+  if (channel.corner_values.size() != corners)
+    throw InputError(fmt::format("face-varying channel has {} corner indices for {} corners",
+                                 channel.corner_values.size(), corners));
+  for (size_t c = 0; c < corners; ++c)
+    if (channel.corner_values[c] >= channel.value_count)
+      throw InputError(fmt::format("face-varying index {} at corner {} is past the {} values",
+                                   channel.corner_values[c], c, channel.value_count));
+}
+
 FVarState fvar_cage_state(const SubdivOptions& o, const RefinedLevel& L0, const Adj& a,
                           std::span<const uint32_t> corner_values, size_t value_count) {
   const size_t nc = L0.face_vertices.size(), nv = L0.vertex_count();
-  if (corner_values.size() != nc)
-    throw InputError(fmt::format("face-varying channel has {} corner indices for {} corners",
-                                 corner_values.size(), nc));
-  for (size_t c = 0; c < nc; ++c)
-    if (corner_values[c] >= value_count)
-      throw InputError(fmt::format("face-varying index {} at corner {} is past the {} values",
-                                   corner_values[c], c, value_count));
+  check_face_varying({corner_values, value_count}, nc);
   const Mode m(o);
   const LevelRef l{L0, a};
   const uint32_t* u = corner_values.data();

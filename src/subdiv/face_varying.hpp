@@ -33,6 +33,10 @@ enum FVarTag : uint8_t {
 // Edge tags: the faces on it disagree on a value at an end; linearly interpolated.
 enum FVarEdge : uint8_t { kFvEdgeMismatch = 1, kFvEdgeLinear = 2 };
 
+// Throws InputError unless `channel` has one index per corner (`corners` of them), each below
+// its value count.
+void check_face_varying(const FaceVaryingInput& channel, size_t corners);
+
 // The channel on the cage (level 0, with its adjacency `a`). Throws InputError when
 // corner_values has the wrong size or an index >= value_count.
 FVarState fvar_cage_state(const SubdivOptions& o, const RefinedLevel& L0, const Adj& a,

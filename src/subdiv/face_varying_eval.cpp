@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <vector>
 
+#include "face_varying.hpp"
 #include "limn/subdiv/patches.hpp"
 
 namespace limn {
@@ -20,14 +21,8 @@ PtexCoord ptex_coord(const PatchTable& table, const PatchCoord& c) {
 namespace {
 
 void check_channel(const Mesh& cage, const FaceVaryingInput& ch, int width) {
-  if (ch.corner_values.size() != cage.corner_count())
-    throw InputError(fmt::format("face-varying channel has {} corner indices for {} corners",
-                                 ch.corner_values.size(), cage.corner_count()));
+  refine_detail::check_face_varying(ch, cage.corner_count());
   if (width < 1 || width > 4) throw InputError("face-varying evaluation: width must be 1-4");
-  for (size_t c = 0; c < ch.corner_values.size(); ++c)
-    if (ch.corner_values[c] >= ch.value_count)
-      throw InputError(fmt::format("face-varying index {} at corner {} is past the {} values",
-                                   ch.corner_values[c], c, ch.value_count));
 }
 
 // Channel k of the corners of ptex face `corner` of cage face f (its only one for a quad).

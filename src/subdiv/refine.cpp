@@ -633,10 +633,11 @@ namespace {
 // A face-varying channel subdivide_uniform carries to its output.
 struct Carried {
   std::vector<float>* values_out;
-  std::vector<uint32_t>* indices;
-  std::vector<float> values;
+  std::vector<uint32_t>* indices_out;
+  std::vector<float> values;  // the current level's
   FVarState state;
   int width;
+  bool unit;  // normals: renormalised at the end
 };
 
 void normalize3(std::vector<float>& v) {
@@ -665,37 +666,52 @@ Mesh subdivide_uniform(const Mesh& cage, int depth, const SubdivOptions& options
   out.tags = cage.tags;
   // UVs and per-corner normals ride along as face-varying channels, colours as vertex data.
   std::vector<Carried> carried;
-  if (!cage.uv_indices.empty()) carried.push_back({&out.uvs, &out.uv_indices, cage.uvs, {}, 2});
-  if (!cage.normal_indices.empty())
-    carried.push_back({&out.normals, &out.normal_indices, cage.normals, {}, 3});
-  for (Carried& c : carried) {
-    const std::vector<uint32_t>& idx = c.width == 2 ? cage.uv_indices : cage.normal_indices;
-    c.state = fvar_cage_state(options, P, pa, idx, c.values.size() / size_t(c.width));
-  }
+  auto carry = [&](std::vector<float>& values_out, std::vector<uint32_t>& indices_out,
+                   const std::vector<float>& values, const std::vector<uint32_t>& indices,
+                   int width, bool unit) {
+    if (indices.empty()) return;
+    carried.push_back({&values_out, &indices_out, values,
+                       fvar_cage_state(options, P, pa, indices, values.size() / size_t(width)),
+                       width, unit});
+  };
+  carry(out.uvs, out.uv_indices, cage.uvs, cage.uv_indices, 2, false);
+  carry(out.normals, out.normal_indices, cage.normals, cage.normal_indices, 3, true);
   std::vector<float> colors =
       cage.colors.size() == 4 * cage.vertex_count() ? cage.colors : std::vector<float>();
-  // The output's faces (holes dropped) with their channels' corners.
-  auto emit_faces = [&](const RefinedLevel& L, const std::vector<uint8_t>& hole) {
-    for (size_t f = 0; f < L.face_count(); ++f) {
-      if (hole[f]) continue;
+  // The output's faces and their channels' corners, holes dropped in place (the last level's
+  // arrays are most of the peak: no second copy).
+  auto emit_faces = [&](RefinedLevel& L) {
+    // Writes never pass what is still to be read: face f's corners land at or before their own
+    // place, its end offset at or before index f + 1 (equal to it until a hole is skipped).
+    uint32_t w = 0, kept = 0;
+    const size_t nf = L.face_count();
+    for (size_t f = 0; f < nf; ++f) {
       const uint32_t b = L.face_offsets[f], e = L.face_offsets[f + 1];
-      out.add_face(std::span<const uint32_t>(L.face_vertices.data() + b, e - b));
-      for (Carried& c : carried)
-        c.indices->insert(c.indices->end(), c.state.corner_value.begin() + b,
-                          c.state.corner_value.begin() + e);
+      if (L.face_hole[f]) continue;
+      for (uint32_t c = b; c < e; ++c, ++w) {
+        L.face_vertices[w] = L.face_vertices[c];
+        for (Carried& k : carried) k.state.corner_value[w] = k.state.corner_value[c];
+      }
+      L.face_offsets[++kept] = w;
     }
-    for (Carried& c : carried) {
+    L.face_offsets.resize(size_t(kept) + 1);
+    L.face_vertices.resize(w);
+    out.face_offsets = std::move(L.face_offsets);
+    out.face_vertices = std::move(L.face_vertices);
+    for (Carried& k : carried) {
+      k.state.corner_value.resize(w);
       // Values are the level's own (on the cage: the caller's indices into its values).
-      if (!c.state.source.empty())
-        for (uint32_t& i : *c.indices) i = c.state.source[i];
-      *c.values_out = std::move(c.values);
-      if (c.width == 3) normalize3(*c.values_out);
+      if (!k.state.source.empty())
+        for (uint32_t& i : k.state.corner_value) i = k.state.source[i];
+      *k.indices_out = std::move(k.state.corner_value);
+      *k.values_out = std::move(k.values);
+      if (k.unit) normalize3(*k.values_out);
     }
     out.colors = std::move(colors);
   };
   if (depth == 0) {
     out.positions = cage.positions;
-    emit_faces(P, P.face_hole);
+    emit_faces(P);
     out.crease_edges = cage.crease_edges, out.crease_sharpness = cage.crease_sharpness;
     out.corner_vertices = cage.corner_vertices, out.corner_sharpness = cage.corner_sharpness;
     if (stats) *stats = std::move(st);
@@ -766,9 +782,7 @@ Mesh subdivide_uniform(const Mesh& cage, int depth, const SubdivOptions& options
     }
     const bool holes = std::find(C.face_hole.begin(), C.face_hole.end(), 1) != C.face_hole.end();
     if (holes || !carried.empty()) {
-      out.face_offsets.reserve(C.face_count() + 1);
-      out.face_vertices.reserve(C.face_vertices.size());
-      emit_faces(C, C.face_hole);
+      emit_faces(C);
     } else {
       out.face_offsets = std::move(C.face_offsets);
       out.face_vertices = std::move(C.face_vertices);
