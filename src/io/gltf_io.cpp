@@ -7,12 +7,11 @@
 #include <sstream>
 
 #include "limn/io/mesh_io.hpp"
+#include "split_seams.hpp"
 
 namespace limn {
 
 namespace {
-
-constexpr uint32_t kNoVariant = 0xFFFFFFFFu;
 
 template <class T>
 int add_view(tinygltf::Model& model, std::vector<unsigned char>& bin, const std::vector<T>& data,
@@ -47,33 +46,21 @@ void write_glb(const Mesh& m, std::string& out) {
   const bool has_c = !m.colors.empty();
   const std::vector<float> smooth = has_n ? std::vector<float>() : vertex_normals(m);
 
-  // Output vertices: one per distinct (vertex, normal, uv) corner combination. Each vertex keeps
-  // a short list of its variants, so this is linear without hashing.
-  std::vector<uint32_t> remap(m.corner_count());
-  std::vector<float> pos, nrm, uv, col;
-  {
-    struct Variant {
-      uint32_t n, t, out;
-    };
-    std::vector<std::vector<Variant>> variants(m.vertex_count());
-    for (size_t c = 0; c < m.corner_count(); ++c) {
-      const uint32_t v = m.face_vertices[c];
-      const uint32_t n = has_n ? m.normal_indices[c] : v, t = has_uv ? m.uv_indices[c] : 0;
-      uint32_t found = kNoVariant;
-      for (const Variant& x : variants[v])
-        if (x.n == n && x.t == t) found = x.out;
-      if (found == kNoVariant) {
-        found = static_cast<uint32_t>(pos.size() / 3);
-        variants[v].push_back({n, t, found});
-        pos.insert(pos.end(), &m.positions[3 * size_t(v)], &m.positions[3 * size_t(v)] + 3);
-        const float* src = has_n ? &m.normals[3 * size_t(n)] : &smooth[3 * size_t(v)];
-        nrm.insert(nrm.end(), src, src + 3);
-        if (has_uv) uv.insert(uv.end(), {m.uvs[2 * size_t(t)], 1.0f - m.uvs[2 * size_t(t) + 1]});
-        if (has_c) col.insert(col.end(), &m.colors[4 * size_t(v)], &m.colors[4 * size_t(v)] + 4);
-      }
-      remap[c] = found;
-    }
+  // Output vertices: one per distinct (vertex, normal, uv) corner combination.
+  std::vector<uint32_t> source;
+  const Mesh split = split_at_seams(m, &source);
+  const std::vector<uint32_t>& remap = split.face_vertices;
+  std::vector<float> pos = split.positions, nrm, uv, col = split.colors;
+  if (has_n) {
+    nrm = split.normals;
+  } else {
+    nrm.reserve(3 * source.size());
+    for (uint32_t v : source)
+      nrm.insert(nrm.end(), &smooth[3 * size_t(v)], &smooth[3 * size_t(v)] + 3);
   }
+  uv.reserve(split.uvs.size());
+  for (size_t i = 0; i < split.uvs.size(); i += 2)
+    uv.insert(uv.end(), {split.uvs[i], 1.0f - split.uvs[i + 1]});
   // glTF wants unit normals; zero ones (isolated or degenerate) get an arbitrary unit vector.
   for (size_t i = 0; i < nrm.size(); i += 3) {
     const float l = std::sqrt(nrm[i] * nrm[i] + nrm[i + 1] * nrm[i + 1] + nrm[i + 2] * nrm[i + 2]);
