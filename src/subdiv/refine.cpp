@@ -587,6 +587,9 @@ UniformRefinement refine_uniform(const Mesh& cage, int depth, const SubdivOption
   r.levels.resize(size_t(depth) + 1);
   r.stencils.resize(size_t(depth));
   Adj a = cage_level(cage, options, r.levels[0]);
+  // The last level's adjacency is kept only for face-varying limits.
+  const bool want_limit =
+      std::any_of(face_varying.begin(), face_varying.end(), [](auto& c) { return c.limit; });
   std::vector<FVarState> fvar;
   for (const FaceVaryingInput& in : face_varying) {
     fvar.push_back(fvar_cage_state(options, r.levels[0], a, in.corner_values, in.value_count));
@@ -610,9 +613,6 @@ UniformRefinement refine_uniform(const Mesh& cage, int depth, const SubdivOption
       fvar[i] = std::move(child);
     }
     Adj ca;
-    // The last level's adjacency only for face-varying limits.
-    const bool want_limit =
-        std::any_of(face_varying.begin(), face_varying.end(), [](auto& c) { return c.limit; });
     const bool last = k + 1 == size_t(depth) && !want_limit;
     derive_child(P, a, C, true, last ? nullptr : &ca);
     child_vertex_sharpness(P, all, C);
