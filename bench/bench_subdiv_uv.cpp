@@ -9,8 +9,10 @@
 // And the same three without the channel, so the UVs' own cost shows. Models: the car and BigGuy
 // (their own UVs) and the 800k-quad terrain (planar UVs cut by a seam down the middle). Modes:
 // OpenSubdiv's default (linear all) and "none" (smooth UVs, the most work).
-// Then feature-adaptive builds at depth 3 with and without the channel (osd_adaptive).
-// Times are the best of five runs below half a second. Usage: limn_bench_subdiv_uv [--cap-gb N]
+// Then feature-adaptive builds at depth 3 without the channel, with linear UVs and with smooth ones
+// (osd_adaptive, limn_adaptive).
+// Times are the best of five runs below half a second.
+// Usage: limn_bench_subdiv_uv [--cap-gb N] [--adaptive-only]
 #include <fmt/format.h>
 
 #include <cmath>
@@ -78,14 +80,18 @@ size_t limn_full(const limn::Mesh& m, int level, limn::FVarInterpolation mode, b
 }
 
 // Feature-adaptive builds with the UV channel: OpenSubdiv's RefineAdaptive + PatchTableFactory
-// (Gregory-basis end caps, generateFVarTables: its default legacy linear face-varying patches)
-// and the UVs of every adaptive level; limn's build_patches and the patch points (linear UVs
-// need nothing more: evaluate_linear_face_varying reads the cage's).
-size_t osd_adaptive(const limn::Mesh& m, int depth, bool uv) {
-  const std::unique_ptr<Far::TopologyRefiner> r = limn::bench::osd_refiner(m, uv);
+// (Gregory-basis end caps, generateFVarTables) and the UVs of every adaptive level; linear UVs
+// take its default legacy linear face-varying patches, smooth ones (mode "none") its non-linear
+// face-varying patches and their local points. limn: build_patches and the patch points; linear
+// UVs need nothing more (evaluate_linear_face_varying reads the cage's), smooth ones
+// build_face_varying_patches and the channel's points.
+size_t osd_adaptive(const limn::Mesh& m, int depth, bool uv, bool smooth) {
+  const std::unique_ptr<Far::TopologyRefiner> r = limn::bench::osd_refiner(
+      m, uv, smooth ? limn::FVarInterpolation::none : limn::FVarInterpolation::all);
   Far::PatchTableFactory::Options po(depth);
   po.SetEndCapType(Far::PatchTableFactory::Options::ENDCAP_GREGORY_BASIS);
   po.generateFVarTables = uv;
+  po.generateFVarLegacyLinearPatches = !smooth;
   r->RefineAdaptive(po.GetRefineAdaptiveOptions());
   std::unique_ptr<Far::PatchTable> table(Far::PatchTableFactory::Create(*r, po));
   std::unique_ptr<const Far::StencilTable> st;
@@ -97,7 +103,9 @@ size_t osd_adaptive(const limn::Mesh& m, int depth, bool uv) {
   }
   size_t n = table->GetNumPatchesTotal();
   if (uv) {
-    std::vector<Value<2>> t(size_t(r->GetNumFVarValuesTotal(0)));
+    const Far::StencilTable* local = table->GetLocalPointFaceVaryingStencilTable(0);
+    const size_t refined = size_t(r->GetNumFVarValuesTotal(0));
+    std::vector<Value<2>> t(refined + (local ? size_t(local->GetNumStencils()) : 0));
     for (size_t i = 0; i < m.uvs.size() / 2; ++i) t[i] = {{m.uvs[2 * i], m.uvs[2 * i + 1]}};
     const Far::PrimvarRefiner pr(*r);
     Value<2>* src = t.data();
@@ -106,17 +114,29 @@ size_t osd_adaptive(const limn::Mesh& m, int depth, bool uv) {
       pr.InterpolateFaceVarying(k, src, dst, 0);
       src = dst;
     }
+    if (local && local->GetNumStencils() > 0) local->UpdateValues(t.data(), t.data() + refined);
     n += t.size();
   }
   return n + size_t(st->GetNumStencils());
 }
 
-size_t limn_adaptive(const limn::Mesh& m, int depth) {
+size_t limn_adaptive(const limn::Mesh& m, int depth, bool smooth) {
   limn::PatchOptions po;
   po.subdiv = limn::subdiv_options(m);
+  po.subdiv.face_varying = smooth ? limn::FVarInterpolation::none : limn::FVarInterpolation::all;
   po.depth = depth;
   const limn::PatchTable t = limn::build_patches(m, po);
-  return t.patch_count() + t.points(m.positions).size() / 3;
+  size_t n = t.patch_count() + t.points(m.positions).size() / 3;
+  if (smooth) {
+    const limn::FaceVaryingInput in{m.uv_indices, m.uvs.size() / 2};
+    const limn::FaceVaryingPatches f = limn::build_face_varying_patches(m, t, in, po);
+    std::vector<float> values(3 * f.source.size(), 0.0f);
+    for (size_t x = 0; x < f.source.size(); ++x)
+      values[3 * x] = m.uvs[2 * size_t(f.source[x])],
+                 values[3 * x + 1] = m.uvs[2 * size_t(f.source[x]) + 1];
+    n += f.table.patch_count() + f.table.points(values).size() / 3;
+  }
+  return n;
 }
 
 // `m` carries only what is measured: UVs or nothing (the lean path carries whatever it has).
@@ -178,14 +198,18 @@ void row(const std::string& label, int level, const char* uv, const std::string&
 
 int main(int argc, char** argv) {
   double cap_gb = 22;
-  for (int i = 1; i + 1 < argc; i += 2)
-    if (std::string(argv[i]) == "--cap-gb") cap_gb = std::atof(argv[i + 1]);
+  bool uniform = true;
+  for (int i = 1; i < argc; ++i) {
+    if (std::string(argv[i]) == "--cap-gb" && i + 1 < argc) cap_gb = std::atof(argv[++i]);
+    if (std::string(argv[i]) == "--adaptive-only") uniform = false;
+  }
   const std::filesystem::path models = LIMN_SHARED_MODELS;
   std::vector<std::pair<std::string, int>> cases = {
       {"osd/catmark_car.obj", 3}, {"quads/bigguy.obj", 3}, {"terrain", 2}};
   fmt::print("{:<10} {:<5} {:<6} {:<12} {:>10} {:>9} {:>9}  {}\n", "model", "level", "uv", "who",
              "values", "ms", "peak MB", "OpenSubdiv/limn");
   for (const auto& [name, level] : cases) {
+    if (!uniform) break;
     limn::Mesh m;
     if (name == "terrain") {
       m = limn::make_shape("terrain");
@@ -223,14 +247,14 @@ int main(int argc, char** argv) {
     limn::Mesh m = limn::read_mesh(models / name);
     m.normals.clear(), m.normal_indices.clear(), m.colors.clear();
     const std::string label = std::filesystem::path(name).stem().string();
-    for (const bool uv : {false, true}) {
+    for (const auto& [uv, smooth] : {std::pair{false, false}, {true, false}, {true, true}}) {
       limn::bench::Outcome osd;
       for (const char* who : {"osd", "limn"}) {
         const std::string w = who;
-        const auto fn = [&]() -> size_t {
-          return w == "osd" ? osd_adaptive(m, 3, uv) : limn_adaptive(m, 3);
+        const auto fn = [&, uv = uv, smooth = smooth]() -> size_t {
+          return w == "osd" ? osd_adaptive(m, 3, uv, smooth) : limn_adaptive(m, 3, smooth);
         };
-        row(label, 3, uv ? "linear" : "-", who, fn, cap_gb, osd);
+        row(label, 3, !uv ? "-" : smooth ? "none" : "linear", who, fn, cap_gb, osd);
       }
     }
   }

@@ -44,8 +44,7 @@ void run_adaptive(const std::string& mesh, const std::string& out_path, const st
   to.depth_colors = a.depth_colors;
   const Mesh out = tessellate_patches(cage, table, points, to);
   timings["tessellate"] = sw.lap();
-  // UVs come along where they are linear (the default); face-varying patches for the other
-  // interpolation modes are not built yet.
+  // UVs come along in every interpolation mode (smooth ones through face-varying patches).
   std::vector<std::string> lost;
   if (!cage.uv_indices.empty() && out.uv_indices.empty()) lost.emplace_back("uv");
   if (!cage.colors.empty() && out.colors.empty()) lost.emplace_back("colors");

@@ -253,6 +253,11 @@ struct Level {
   bool deferred = false;  // classified in level_done (a level that refines nothing)
 };
 
+// Names a face of a level by where it lies: its ptex face and origin (unique within a level).
+inline uint64_t face_key(uint32_t ptex, uint32_t u, uint32_t v) {
+  return uint64_t(ptex) << 32 | uint64_t(u) << 16 | v;
+}
+
 // Appends to a CSR of vertex sets (values, offsets) the sorted union of `from`'s sets of the
 // given vertices: the cage vertices a new point's, or a face's, depth comes from.
 template <class Vertices>
@@ -358,6 +363,9 @@ class Builder {
   void set_stats(PatchStats* stats) { stats_ = stats; }
   /// Region builds: the role of each cage face (see Level::role).
   void set_roles(std::span<const uint8_t> roles) { roles_ = roles; }
+  /// Refines exactly the faces another build refined (face-varying patches follow their vertex
+  /// patches): per level, the sorted face_key()s of the faces to refine.
+  void set_replay(const std::vector<std::vector<uint64_t>>* keys) { replay_ = keys; }
 
  private:
   RingView ring(Level& L, const RefinedLevel& R, uint32_t v) const;
@@ -382,6 +390,8 @@ class Builder {
   PatchOptions o_;
   std::span<const uint8_t> depth_;
   std::span<const uint8_t> roles_;
+  const std::vector<std::vector<uint64_t>>* replay_ = nullptr;
+  bool replayed(size_t k, const Level::Face& f) const;
   std::vector<Level> levels_;
   std::vector<uint32_t> ptex_first_;  // ptex_offsets(cage_): becomes the table's ptex_of_face
   // The cage face whose ptex faces hold `ptex`. O(log faces).

@@ -266,6 +266,12 @@ void Builder::aligned_corners(const Level& L, const RefinedLevel& R, uint32_t f,
   for (uint32_t s = 0; s < 4; ++s) c[s] = b + (s + 4 - rot) % 4;  // corner ids
 }
 
+bool Builder::replayed(size_t k, const Level::Face& f) const {
+  if (k >= replay_->size()) return false;
+  const std::vector<uint64_t>& keys = (*replay_)[k];
+  return std::binary_search(keys.begin(), keys.end(), face_key(f.ptex, f.u, f.v));
+}
+
 void Builder::request(size_t k, const SparseLevel& S, const LevelAdjacency& adj,
                       std::vector<uint8_t>& requested) {
   const RefinedLevel& R = S.level;
@@ -355,7 +361,8 @@ void Builder::request(size_t k, const SparseLevel& S, const LevelAdjacency& adj,
   }
   // A level where no vertex wants more depth refines nothing (faces are forced only at the
   // cage): its corner table, rings and tags wait for level_done, when level k - 1 is gone.
-  L.deferred = k > 0 && std::all_of(L.rem.begin(), L.rem.end(), [](uint8_t d) { return d == 0; });
+  L.deferred = k > 0 && !replay_ &&
+               std::all_of(L.rem.begin(), L.rem.end(), [](uint8_t d) { return d == 0; });
   if (!L.deferred) classify(k, S, adj, &requested);
   // Level k - 1 has given level k what it needs (depths, placement, sources).
   if (k > 0) {
@@ -389,6 +396,16 @@ void Builder::classify(size_t k, const SparseLevel& S, const LevelAdjacency& adj
   for (uint32_t f = 0; f < nf; ++f) {
     if (!L.owned[f]) continue;
     const uint32_t b = R.face_offsets[f], e = R.face_offsets[f + 1];
+    if (replay_) {
+      for (uint32_t c = b; c < e; ++c) tag(R.face_vertices[c]);
+      L.requested[f] = replayed(k, L.param[f]) && (L.role.empty() || L.role[f]);
+      if (requested) (*requested)[f] = L.requested[f];
+      float sharp = 0;
+      const int j =
+          L.requested[f] || !o_.single_crease_patches ? -1 : single_crease(L, R, f, sharp);
+      if (j >= 0) L.crease_edge[f] = int8_t(j), L.crease_sharpness[f] = sharp;
+      continue;
+    }
     if (o_.single_crease_patches) {
       float sharp = 0;
       const int j = single_crease(L, R, f, sharp);

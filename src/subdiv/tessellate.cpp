@@ -265,17 +265,20 @@ void Tessellator::evaluate(std::vector<uint32_t> tris, Mesh& out) const {
 }
 
 // The cage's UVs on every triangle corner, from the corner's place in its own patch (so a
-// vertex on a UV seam takes each side's value); equal values at a vertex are stored once. Only
-// linear channels (FVarInterpolation::all) have limit values without face-varying patches.
+// vertex on a UV seam takes each side's value); equal values at a vertex are stored once. Smooth
+// channels go through their face-varying patches (built with the default patch options).
 void Tessellator::face_varying(Mesh& out) const {
-  if (cage_.uv_indices.empty() || t_.options.face_varying != FVarInterpolation::all) return;
+  if (cage_.uv_indices.empty()) return;
   const size_t nc = out.face_vertices.size();
   std::vector<PtexCoord> at(nc);
   for (size_t c = 0; c < nc; ++c)
     at[c] = ptex_coord(t_, {tri_patch_[c / 3], corner_st_[2 * c], corner_st_[2 * c + 1]});
   std::vector<float> uv(2 * nc);
   const FaceVaryingInput in{cage_.uv_indices, cage_.uvs.size() / 2};
-  evaluate_linear_face_varying(cage_, in, cage_.uvs.data(), 2, at, uv.data());
+  PatchOptions po;
+  po.subdiv = t_.options;
+  const FaceVaryingPatches patches = build_face_varying_patches(cage_, t_, in, po);
+  evaluate_face_varying(cage_, in, patches, cage_.uvs.data(), 2, at, uv.data());
   // One value per distinct UV at each vertex (a handful at most: seams).
   std::vector<std::vector<uint32_t>> at_vertex(out.vertex_count());
   out.uv_indices.resize(nc);

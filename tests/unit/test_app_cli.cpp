@@ -477,8 +477,8 @@ TEST_F(CliUv, WhatAnOutputCannotHoldIsNamed) {
   EXPECT_EQ(dropped, nlohmann::json({"uv", "creases", "corners"}));
   EXPECT_THAT(res.err, HasSubstr("warning"));
   EXPECT_THAT(res.err, HasSubstr("uv"));
-  // The adaptive surface carries linear UVs (the default); smooth ones need face-varying
-  // patches, not built yet: it says it drops them.
+  // The adaptive surface carries linear UVs (the default) and smooth ones (through face-varying
+  // patches): the two differ inside the faces.
   res =
       limn("subdivide " + q(car) + " -o " + q(dir() / "car.obj") + " --adaptive --depth 1 --json");
   ASSERT_EQ(res.code, 0) << res.err;
@@ -490,7 +490,22 @@ TEST_F(CliUv, WhatAnOutputCannotHoldIsNamed) {
   res = limn("subdivide " + q(smooth) + " -o " + q(dir() / "smooth-out.obj") +
              " --adaptive --depth 1 --json");
   ASSERT_EQ(res.code, 0) << res.err;
-  EXPECT_EQ(nlohmann::json::parse(res.out)["dropped"], nlohmann::json({"uv"}));
+  EXPECT_EQ(nlohmann::json::parse(res.out)["dropped"], nlohmann::json::array());
+  const Mesh smooth_out = read_mesh(dir() / "smooth-out.obj");
+  ASSERT_EQ(smooth_out.uv_indices.size(), smooth_out.corner_count());
+  ASSERT_EQ(smooth_out.corner_count(), adaptive.corner_count());
+  double differ = 0;
+  for (size_t c = 0; c < adaptive.corner_count(); ++c)
+    for (size_t k = 0; k < 2; ++k)
+      differ = std::max(differ, double(std::fabs(smooth_out.uvs[2 * smooth_out.uv_indices[c] + k] -
+                                                 adaptive.uvs[2 * adaptive.uv_indices[c] + k])));
+  EXPECT_GT(differ, 1e-3);
+  // And render shows them (from the CPU tessellation).
+  res = limn("render " + q(smooth) + " -o " + q(dir() / "smooth.png") +
+             " --adaptive --depth 1 --uv-checker 8 --samples 1");
+  ASSERT_EQ(res.code, 0) << res.err;
+  EXPECT_TRUE(fs::exists(dir() / "smooth.png"));
+  EXPECT_THAT(res.err, HasSubstr("CPU tessellation"));
 }
 
 }  // namespace

@@ -199,6 +199,36 @@ void evaluate_linear_face_varying(const Mesh& cage, const FaceVaryingInput& chan
 std::vector<float> ptex_corner_values(const Mesh& cage, const FaceVaryingInput& channel,
                                       const float* values, int width);
 
+/// A face-varying channel's own patches beside a vertex patch table, for the interpolation modes
+/// other than FVarInterpolation::all (OpenSubdiv's face-varying patch tables with
+/// generateFVarLegacyLinearPatches off): at the level and place of every vertex patch, a regular
+/// B-spline patch where the channel's topology is regular there (boundary edges along seams) and
+/// a Gregory end cap where it is not. The channel does not drive isolation (as Far without
+/// considerFVarChannels). For FVarInterpolation::all the table stays empty: values are bilinear
+/// (evaluate_linear_face_varying).
+struct FaceVaryingPatches {
+  FVarInterpolation interpolation = FVarInterpolation::all;
+  PatchTable table;  ///< over the channel's own points: its level 0 is one point per source entry
+  std::vector<uint32_t> source;  ///< per level-0 point: the channel's value index it takes
+};
+
+/// Builds the patches of `channel` for `table`, which build_patches or select_patches made from
+/// `cage` with `options` (options.subdiv.face_varying picks the mode). About the cost of the
+/// vertex table's build. Throws InputError for a channel of the wrong size, an index past its
+/// values, or a table of another cage.
+FaceVaryingPatches build_face_varying_patches(const Mesh& cage, const PatchTable& table,
+                                              const FaceVaryingInput& channel,
+                                              const PatchOptions& options);
+
+/// Face-varying values (`width` 1-4 floats per value, indexed by channel.corner_values) at ptex
+/// coordinates, with derivatives per ptex unit when du/dv are not null: through `patches`, or
+/// bilinear for FVarInterpolation::all. O(stencil entries) to make the channel's points, then
+/// O(depth) per coordinate. Throws InputError like evaluate_linear_face_varying.
+void evaluate_face_varying(const Mesh& cage, const FaceVaryingInput& channel,
+                           const FaceVaryingPatches& patches, const float* values, int width,
+                           std::span<const PtexCoord> coords, float* out, float* du = nullptr,
+                           float* dv = nullptr);
+
 /// Evaluates limit positions (3 floats per coordinate) and, when du/dv are not null, the first
 /// derivatives with respect to the ptex face's u and v (patch-local derivatives scaled by
 /// 2^depth). `points` holds PatchTable::points(). Multi-threaded over coordinates (TBB).

@@ -1,0 +1,145 @@
+// Face-varying patches: a channel's own patches beside a vertex patch table, as OpenSubdiv's Far
+// builds them when its face-varying patches are not all linear (PatchTableFactory with
+// generateFVarLegacyLinearPatches off; facts, not code).
+//
+// The channel's topology is a mesh of its own: one vertex per value (per sibling value of a cage
+// vertex, as face_varying.cpp numbers them), the cage's faces over them, boundaries where seams
+// run. Its refinement equals the channel's when the tags become sharpness: a value that is
+// pinned (a corner) is an infinitely sharp vertex, a crease value lies on the channel mesh's
+// boundary and takes its crease rule, a semi-sharp value keeps its vertex's sharpness and the
+// semi-sharp edges inside its span (so it is a corner until they decay, then a crease, blended
+// as OpenSubdiv blends it), and matching values see the vertex's own topology and sharpness. So
+// the vertex patch builder, told to refine exactly the faces the vertex table refined (the
+// channel does not drive isolation, as in Far without considerFVarChannels), makes the channel's
+// patches: regular B-spline patches where its topology is regular (with boundary edges along
+// seams) and Gregory end caps where it is not, at the same level and place as each vertex patch.
+#include <fmt/format.h>
+
+#include <algorithm>
+
+#include "face_varying.hpp"
+#include "patch_builder.hpp"
+
+namespace limn {
+
+using namespace refine_detail;
+using namespace patch_detail;
+
+namespace {
+
+// Per level, the sorted keys of the faces `t` refined: every ancestor of a patch.
+std::vector<std::vector<uint64_t>> refined_faces(const PatchTable& t) {
+  std::vector<std::vector<uint64_t>> keys;
+  auto add = [&](const PatchParam& p) {
+    if (keys.size() < p.level) keys.resize(p.level);
+    if (p.level > 0) keys[0].push_back(face_key(t.ptex_of_face.at(p.base_face), 0, 0));
+    for (uint32_t k = 1; k < p.level; ++k) {
+      const uint32_t shift = p.level - k;
+      keys[k].push_back(face_key(p.ptex, uint32_t(p.u) >> shift, uint32_t(p.v) >> shift));
+    }
+  };
+  for (const PatchParam& p : t.regular_params) add(p);
+  for (const PatchParam& p : t.gregory_params) add(p);
+  for (std::vector<uint64_t>& level : keys) {
+    std::sort(level.begin(), level.end());
+    level.erase(std::unique(level.begin(), level.end()), level.end());
+  }
+  return keys;
+}
+
+// The channel's mesh (see the file comment); `source` gets each of its vertices' value index.
+Mesh channel_mesh(const Mesh& cage, const SubdivOptions& o, const FaceVaryingInput& channel,
+                  std::vector<uint32_t>& source) {
+  RefinedLevel L0;
+  const Adj adj = cage_level(cage, o, L0);
+  FVarState s = fvar_cage_state(o, L0, adj, channel.corner_values, channel.value_count);
+  Mesh m;
+  m.positions.assign(3 * s.value_count(), 0.0f);
+  m.face_offsets = cage.face_offsets;
+  m.face_vertices = s.corner_value;
+  for (uint32_t f = 0; f < L0.face_count(); ++f)
+    if (L0.face_hole[f]) m.hole_faces.push_back(f);
+  const LevelRef l{L0, adj};
+  for (uint32_t c = 0; c < L0.face_vertices.size(); ++c) {
+    const uint32_t e = adj.corner_edge[c];
+    const float x = L0.edge_sharpness[e];
+    if (x > 0.0f && adj.edge_face_count(e) == 2 && !(s.edge[e] & kFvEdgeMismatch))
+      m.crease_edges.insert(m.crease_edges.end(), {s.corner_value[c], s.corner_value[l.next(c)]}),
+          m.crease_sharpness.push_back(x);
+  }
+  for (uint32_t v = 0; v < L0.vertex_count(); ++v) {
+    float dependent = L0.vertex_sharpness[v];  // what a value pinned by its sibling follows
+    for (uint32_t k = adj.veo[v]; k < adj.veo[v + 1]; ++k)
+      if (const float x = L0.edge_sharpness[adj.ve[k]]; x < kInf)
+        dependent = std::max(dependent, x);
+    for (uint32_t x = s.offsets[v]; x < s.offsets[v + 1]; ++x) {
+      const uint8_t t = s.tag[x];
+      float sharpness = L0.vertex_sharpness[v];
+      if (t & kFvDepSharp) {
+        sharpness = dependent;
+      } else if ((t & kFvMismatch) && !(t & kFvSemiSharp)) {
+        sharpness = t & kFvCrease ? 0.0f : kInf;
+      }
+      if (sharpness > 0.0f) m.corner_vertices.push_back(x), m.corner_sharpness.push_back(sharpness);
+    }
+  }
+  source = std::move(s.source);
+  return m;
+}
+
+}  // namespace
+
+FaceVaryingPatches build_face_varying_patches(const Mesh& cage, const PatchTable& table,
+                                              const FaceVaryingInput& channel,
+                                              const PatchOptions& options) {
+  FaceVaryingPatches out;
+  out.interpolation = options.subdiv.face_varying;
+  check_face_varying(channel, cage.corner_count());
+  if (out.interpolation == FVarInterpolation::all) return out;
+  if (table.ptex_of_face.size() != cage.face_count() + 1)
+    throw InputError("face-varying patches: the patch table was built from another cage");
+  const Mesh m = channel_mesh(cage, options.subdiv, channel, out.source);
+  PatchOptions po = options;
+  po.subdiv.boundary = BoundaryInterpolation::edge_only;
+  po.depth = 12;  // only a bound: the vertex table's refinement is replayed
+  const std::vector<std::vector<uint64_t>> keys = refined_faces(table);
+  Builder b(m, po, {});
+  b.set_replay(&keys);
+  SparseRefinement r = isolate(m, po, b);
+  b.build(out.table, r, nullptr);
+  return out;
+}
+
+void evaluate_face_varying(const Mesh& cage, const FaceVaryingInput& channel,
+                           const FaceVaryingPatches& patches, const float* values, int width,
+                           std::span<const PtexCoord> coords, float* out, float* du, float* dv) {
+  if (patches.interpolation == FVarInterpolation::all)
+    return evaluate_linear_face_varying(cage, channel, values, width, coords, out, du, dv);
+  check_face_varying(channel, cage.corner_count());
+  if (width < 1 || width > 4) throw InputError("face-varying evaluation: width must be 1-4");
+  const PatchTable& t = patches.table;
+  const PatchMap map(t);
+  std::vector<PatchCoord> at(coords.size());
+  for (size_t i = 0; i < coords.size(); ++i)
+    at[i] = map.find(coords[i].ptex, coords[i].u, coords[i].v);
+  const size_t w = size_t(width), n = coords.size(), nv = patches.source.size();
+  // Three components at a time, as points.
+  std::vector<float> cage_points(3 * nv), p(3 * n), pu(du ? 3 * n : 0), pv(dv ? 3 * n : 0);
+  for (size_t k0 = 0; k0 < w; k0 += 3) {
+    const size_t kn = std::min<size_t>(3, w - k0);
+    std::fill(cage_points.begin(), cage_points.end(), 0.0f);
+    for (size_t x = 0; x < nv; ++x)
+      for (size_t k = 0; k < kn; ++k)
+        cage_points[3 * x + k] = values[size_t(patches.source[x]) * w + k0 + k];
+    const std::vector<float> points = t.points(cage_points);
+    evaluate_patches(t, points, at, p.data(), du ? pu.data() : nullptr, dv ? pv.data() : nullptr);
+    for (size_t i = 0; i < n; ++i)
+      for (size_t k = 0; k < kn; ++k) {
+        out[i * w + k0 + k] = p[3 * i + k];
+        if (du) du[i * w + k0 + k] = pu[3 * i + k];
+        if (dv) dv[i * w + k0 + k] = pv[3 * i + k];
+      }
+  }
+}
+
+}  // namespace limn
