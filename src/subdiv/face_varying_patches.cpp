@@ -142,4 +142,54 @@ void evaluate_face_varying(const Mesh& cage, const FaceVaryingInput& channel,
   }
 }
 
+void evaluate_face_varying_grids(const Mesh& cage, const FaceVaryingInput& channel,
+                                 const FaceVaryingPatches& patches, const float* values, int width,
+                                 int n, float* out, float* du, float* dv) {
+  if (n < 2 || n > 65536) throw InputError(fmt::format("face-varying grids: n = {} (2-65536)", n));
+  check_face_varying(channel, cage.corner_count());
+  if (width < 1 || width > 4) throw InputError("face-varying evaluation: width must be 1-4");
+  uint32_t ptex_count = 0;
+  for (size_t f = 0; f < cage.face_count(); ++f)
+    ptex_count += cage.face_size(f) == 4 ? 1 : cage.face_size(f);
+  const size_t nn = size_t(n) * size_t(n), w = size_t(width);
+  if (patches.interpolation != FVarInterpolation::all) {
+    // The channel's own table has the cage's ptex faces: evaluate_grids over it, three
+    // components at a time.
+    const PatchTable& t = patches.table;
+    const size_t total = size_t(t.ptex_count) * nn, nv = patches.source.size();
+    std::vector<float> cage_points(3 * nv), p(3 * total), pu(du ? 3 * total : 0),
+        pv(dv ? 3 * total : 0);
+    for (size_t k0 = 0; k0 < w; k0 += 3) {
+      const size_t kn = std::min<size_t>(3, w - k0);
+      std::fill(cage_points.begin(), cage_points.end(), 0.0f);
+      for (size_t x = 0; x < nv; ++x)
+        for (size_t k = 0; k < kn; ++k)
+          cage_points[3 * x + k] = values[size_t(patches.source[x]) * w + k0 + k];
+      evaluate_grids(t, t.points(cage_points), n, p.data(), du ? pu.data() : nullptr,
+                     dv ? pv.data() : nullptr);
+      for (size_t i = 0; i < total; ++i)
+        for (size_t k = 0; k < kn; ++k) {
+          out[i * w + k0 + k] = p[3 * i + k];
+          if (du) du[i * w + k0 + k] = pu[3 * i + k];
+          if (dv) dv[i * w + k0 + k] = pv[3 * i + k];
+        }
+    }
+    return;
+  }
+  // Linear: blocks of ptex faces, so the coordinates stay small.
+  const float step = 1.0f / float(n - 1);
+  const uint32_t block = uint32_t(std::max<size_t>(1, (size_t(1) << 16) / nn));
+  std::vector<PtexCoord> at;
+  for (uint32_t p0 = 0; p0 < ptex_count; p0 += block) {
+    const uint32_t p1 = std::min(ptex_count, p0 + block);
+    at.clear();
+    for (uint32_t p = p0; p < p1; ++p)
+      for (size_t j = 0; j < size_t(n); ++j)
+        for (size_t i = 0; i < size_t(n); ++i) at.push_back({p, float(i) * step, float(j) * step});
+    const size_t o = size_t(p0) * nn * w;
+    evaluate_linear_face_varying(cage, channel, values, width, at, out + o, du ? du + o : nullptr,
+                                 dv ? dv + o : nullptr);
+  }
+}
+
 }  // namespace limn

@@ -522,6 +522,48 @@ TEST(FVarAdaptiveBuilt, TessellatedUvsFollowAFlatGrid) {
   EXPECT_EQ(out.uvs.size() / 2, out.vertex_count());
 }
 
+// evaluate_face_varying_grids follows evaluate_grids point for point. On a flat regular grid
+// whose UVs are its (x, y), B-splines and the boundary rules reproduce linear functions, so
+// wherever the corners are pinned (modes 1-5) every grid point's UV is its limit position's
+// (x, y), and the derivatives are the position's.
+TEST(FVarAdaptiveBuilt, GridUvsFollowAFlatGrid) {
+  Mesh grid;
+  const int cells = 4;
+  for (int y = 0; y <= cells; ++y)
+    for (int x = 0; x <= cells; ++x) grid.add_vertex(float(x), float(y), 0.0f);
+  for (int y = 0; y < cells; ++y)
+    for (int x = 0; x < cells; ++x) {
+      const uint32_t v = uint32_t((cells + 1) * y + x);
+      grid.add_face({v, v + 1, v + uint32_t(cells) + 2, v + uint32_t(cells) + 1});
+    }
+  for (size_t v = 0; v < grid.vertex_count(); ++v)
+    grid.uvs.insert(grid.uvs.end(), {grid.positions[3 * v], grid.positions[3 * v + 1]});
+  grid.uv_indices = grid.face_vertices;
+  const FaceVaryingInput in{grid.uv_indices, grid.uvs.size() / 2};
+  for (int mode = 1; mode <= 5; ++mode) {
+    PatchOptions po;
+    po.subdiv = subdiv_options(grid);
+    po.subdiv.face_varying = FVarInterpolation(mode);
+    po.depth = 2;
+    const PatchTable table = build_patches(grid, po);
+    const FaceVaryingPatches fvp = build_face_varying_patches(grid, table, in, po);
+    const int n = 5;
+    const size_t total = size_t(table.ptex_count) * n * n;
+    std::vector<float> pos(3 * total), pu(3 * total), pv(3 * total);
+    std::vector<float> uv(2 * total), uu(2 * total), uvv(2 * total);
+    evaluate_grids(table, table.points(grid.positions), n, pos.data(), pu.data(), pv.data());
+    evaluate_face_varying_grids(grid, in, fvp, grid.uvs.data(), 2, n, uv.data(), uu.data(),
+                                uvv.data());
+    double worst = 0;
+    for (size_t i = 0; i < total; ++i)
+      for (size_t k = 0; k < 2; ++k)
+        worst = std::max({worst, double(std::fabs(uv[2 * i + k] - pos[3 * i + k])),
+                          double(std::fabs(uu[2 * i + k] - pu[3 * i + k])),
+                          double(std::fabs(uvv[2 * i + k] - pv[3 * i + k]))});
+    EXPECT_LE(worst, 1e-4) << "mode " << mode;
+  }
+}
+
 // Smooth channels are tessellated through their face-varying patches: every corner's UV is
 // evaluate_face_varying's at its ptex coordinate (independent: the corner's place is found again
 // from its position on the flat grid), and seams keep one UV per side.

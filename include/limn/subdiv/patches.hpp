@@ -229,6 +229,13 @@ void evaluate_face_varying(const Mesh& cage, const FaceVaryingInput& channel,
                            std::span<const PtexCoord> coords, float* out, float* du = nullptr,
                            float* dv = nullptr);
 
+/// The face-varying values of evaluate_grids' points: an n x n grid over every ptex face, in
+/// evaluate_grids' order (`width` floats per point: out holds width ptex_count n^2 floats),
+/// derivatives per ptex unit when du/dv are not null. 2 <= n <= 65536. O(ptex_count n^2 depth).
+void evaluate_face_varying_grids(const Mesh& cage, const FaceVaryingInput& channel,
+                                 const FaceVaryingPatches& patches, const float* values, int width,
+                                 int n, float* out, float* du = nullptr, float* dv = nullptr);
+
 /// Evaluates limit positions (3 floats per coordinate) and, when du/dv are not null, the first
 /// derivatives with respect to the ptex face's u and v (patch-local derivatives scaled by
 /// 2^depth). `points` holds PatchTable::points(). Multi-threaded over coordinates (TBB).
