@@ -2,7 +2,6 @@
 // rendered headless (EGL; Mesa's llvmpipe without a GPU).
 #include <fmt/format.h>
 
-#include <algorithm>
 #include <cmath>
 #include <optional>
 #include <sstream>
@@ -13,7 +12,6 @@
 #include "limn/render/draw.hpp"
 #include "limn/render/gl_context.hpp"
 #include "limn/render/image.hpp"
-#include "limn/subdiv/tessellate.hpp"
 
 namespace limn::cli {
 
@@ -111,35 +109,16 @@ void add_render(CLI::App& app) {
     d.uv_checker = o->uv_checker;
     if (d.uv_checker > 0 && mesh.uv_indices.empty())
       throw InputError(fmt::format("{}: --uv-checker: the mesh has no UVs", o->mesh));
-    // The tessellation shaders interpolate linear UVs only; smooth ones (the cage's t
-    // facevaryinginterpolateboundary) come from their face-varying patches on the CPU.
-    const bool cpu_uvs = d.uv_checker > 0 && o->adaptive &&
-                         subdiv_options(mesh).face_varying != FVarInterpolation::all;
     DrawStats st;
     nlohmann::json patches = nullptr;
     Camera cam;
     if (o->adaptive) {
       const AdaptiveSurface surf = build_adaptive(mesh, o->a, w, h, sw, timings);
       cam = surf.cam;
-      if (cpu_uvs) {
-        fmt::print(stderr, "{}: smooth UVs are drawn from the CPU tessellation\n", o->mesh);
-        TessellateOptions to;
-        to.factor = fixed_tess ? o->a.tess : 4;
-        to.camera = fixed_tess ? nullptr : &cam;
-        to.pixels_per_segment = std::exp2(std::round(std::log2(std::clamp(pps, 1.0f, 64.0f))));
-        const Mesh tess = tessellate_patches(mesh, surf.table, surf.points, to);
-        timings["tessellate"] = sw.lap();
-        MeshDrawer drawer(tess);
-        timings["upload"] = sw.lap();
-        target.begin(bg);
-        st = drawer.draw(cam, d);
-        st.patches = surf.table.patch_count();
-      } else {
-        PatchDrawer drawer(mesh, surf.table, surf.points);
-        timings["upload"] = sw.lap();
-        target.begin(bg);
-        st = drawer.draw(cam, d);
-      }
+      PatchDrawer drawer(mesh, surf.table, surf.points);
+      timings["upload"] = sw.lap();
+      target.begin(bg);
+      st = drawer.draw(cam, d);
       patches = {{"regular", surf.table.regular_params.size()},
                  {"gregory", surf.table.gregory_params.size()}};
     } else {

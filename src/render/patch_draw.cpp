@@ -7,8 +7,10 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <map>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "core/timer.hpp"
@@ -221,8 +223,10 @@ struct PatchDrawer::Impl {
   // first use: bit 0 an octree texture, bit 1 outlines, bit 2 depth colours, bit 3 UVs.
   std::array<std::array<gl::Program, 2>, 16> programs;
   std::string vs16, vs20, tc16, tc20, te16, te20;
-  gl::Buffer ptex_uvs;  // 4 UVs per ptex face when the cage has linear UVs
-  bool has_uvs = false;
+  gl::Buffer ptex_uvs;    // 4 UVs per ptex face when the cage has linear UVs
+  gl::Buffer uv_patches;  // smooth UVs: per patch its face-varying patch (UvPatch)
+  size_t uv_patches_cap = 0;
+  bool has_uvs = false, smooth_uvs = false;
   gl::Program regular_capture, gregory_capture;  // transform feedback, no rasterisation
   gl::Buffer points, regular_cvs, gregory_cvs, infos, lines;
   size_t points_cap = 0, lines_cap = 0, regular_cap = 0, gregory_cap = 0, infos_cap = 0;
@@ -241,6 +245,8 @@ struct PatchDrawer::Impl {
   size_t chunk = SIZE_MAX;
 
   const std::array<gl::Program, 2>& programs_for(const DrawOptions& o);
+  // The face-varying patches of smooth UVs under the patches of `table`, uploaded.
+  void upload_uv_patches(const PatchTable& table);
   // The rates of this view, uploaded where they changed.
   void update_rates(const Camera& camera, float pixels_per_segment) {
     line_rates(*cage, topo, camera, pixels_per_segment, rates, rate_scratch);
@@ -268,10 +274,11 @@ const std::array<gl::Program, 2>& PatchDrawer::Impl::programs_for(const DrawOpti
                                      o.texture ? shaders::octree : shaders::no_octree) +
                          shaders::patch_frag;
   // With UVs the evaluation stages compute them too (a define ahead of patch_eval).
-  const std::string te_regular = uvs ? with_header(16, "#define UVS\n", shaders::patch_info,
+  const char* uv_define = smooth_uvs ? "#define SMOOTH_UVS\n" : "#define UVS\n";
+  const std::string te_regular = uvs ? with_header(16, uv_define, shaders::patch_info,
                                                    shaders::patch_eval, shaders::patch_regular_tese)
                                      : te16;
-  const std::string te_gregory = uvs ? with_header(20, "#define UVS\n", shaders::patch_info,
+  const std::string te_gregory = uvs ? with_header(20, uv_define, shaders::patch_info,
                                                    shaders::patch_eval, shaders::patch_gregory_tese)
                                      : te20;
   p[0] = gl::program("regular patches", {{GL_VERTEX_SHADER, vs16},
@@ -290,14 +297,15 @@ PatchDrawer::PatchDrawer(const Mesh& cage, const PatchTable& table, std::span<co
   Impl& m = *impl_;
   m.cage = &cage;
   m.topo = build_topology(cage);
+  // Linear UVs (the default mode) need only each ptex face's corners; smooth ones their
+  // face-varying patches, made with the patches (upload_patches).
+  m.has_uvs = !cage.uv_indices.empty();
+  m.smooth_uvs = m.has_uvs && table.options.face_varying != FVarInterpolation::all;
   upload_patches(table);
-  // Linear UVs (the default mode) need only each ptex face's corners; others need face-varying
-  // patches, not built yet.
-  if (!cage.uv_indices.empty() && table.options.face_varying == FVarInterpolation::all) {
+  if (m.has_uvs && !m.smooth_uvs) {
     const FaceVaryingInput in{cage.uv_indices, cage.uvs.size() / 2};
     const std::vector<float> uv = ptex_corner_values(cage, in, cage.uvs.data(), 2);
     m.ptex_uvs = gl::buffer(uv.data(), uv.size() * sizeof(float));
-    m.has_uvs = true;
   }
   m.vs16 = with_header(16, shaders::patch_vert), m.vs20 = with_header(20, shaders::patch_vert);
   m.tc16 = with_header(16, shaders::patch_info, shaders::patch_tesc),
@@ -329,6 +337,54 @@ PatchDrawer::PatchDrawer(const Mesh& cage, const PatchTable& table, std::span<co
 }
 
 PatchDrawer::~PatchDrawer() = default;
+
+namespace {
+
+// patch_eval.glsl's UvPatch (std430: 20 vec2, then 8 bytes).
+struct UvPatch {
+  float cv[40];
+  uint32_t bits;
+  float sharpness;
+};
+static_assert(sizeof(UvPatch) == 168);
+
+}  // namespace
+
+// The face-varying patch under each patch (regular, then end caps), found by its place: both
+// tables cover the same squares of the same ptex faces.
+void PatchDrawer::Impl::upload_uv_patches(const PatchTable& table) {
+  const Mesh& c = *cage;
+  const FaceVaryingInput in{c.uv_indices, c.uvs.size() / 2};
+  PatchOptions po;
+  po.subdiv = table.options;
+  const FaceVaryingPatches fv = build_face_varying_patches(c, table, in, po);
+  std::vector<float> cage_uvs(3 * fv.source.size(), 0.0f);
+  for (size_t x = 0; x < fv.source.size(); ++x)
+    cage_uvs[3 * x] = c.uvs[2 * size_t(fv.source[x])],
+                 cage_uvs[3 * x + 1] = c.uvs[2 * size_t(fv.source[x]) + 1];
+  const std::vector<float> uv = fv.table.points(cage_uvs);
+  auto key = [](const PatchParam& p) { return std::tuple(p.ptex, p.depth, p.u, p.v); };
+  std::map<std::tuple<uint32_t, uint8_t, uint16_t, uint16_t>, UvPatch> by_place;
+  const size_t nr = fv.table.regular_params.size();
+  for (size_t i = 0; i < fv.table.patch_count(); ++i) {
+    const bool cap = i >= nr;
+    const PatchParam& p = cap ? fv.table.gregory_params[i - nr] : fv.table.regular_params[i];
+    UvPatch u{};
+    const uint32_t* pts =
+        cap ? &fv.table.gregory_points[20 * (i - nr)] : &fv.table.regular_points[16 * i];
+    for (int j = 0; j < (cap ? 20 : 16); ++j)
+      u.cv[2 * j] = uv[3 * size_t(pts[j])], u.cv[2 * j + 1] = uv[3 * size_t(pts[j]) + 1];
+    u.bits = uint32_t(p.boundary & 0xF) << 8 | uint32_t(p.type) << 16 |
+             uint32_t(p.crease_edge & 3) << 18;
+    u.sharpness = p.sharpness;
+    by_place[key(p)] = u;
+  }
+  std::vector<UvPatch> out;
+  out.reserve(table.patch_count());
+  for (const auto* params : {&table.regular_params, &table.gregory_params})
+    for (const PatchParam& p : *params) out.push_back(by_place.at(key(p)));
+  gl::upload(uv_patches, uv_patches_cap, out.data(), out.size() * sizeof(UvPatch));
+}
 
 void PatchDrawer::upload_patches(const PatchTable& table) {
   Impl& m = *impl_;
@@ -375,6 +431,7 @@ void PatchDrawer::upload_patches(const PatchTable& table) {
   gl::upload(m.gregory_cvs, m.gregory_cap, table.gregory_points.data(),
              table.gregory_points.size() * 4);
   gl::upload(m.infos, m.infos_cap, infos.data(), infos.size() * sizeof(PatchInfo));
+  if (m.smooth_uvs) m.upload_uv_patches(table);
 }
 
 void PatchDrawer::set_patches(const PatchTable& table) {
@@ -440,7 +497,10 @@ DrawStats PatchDrawer::draw(const Camera& camera, const DrawOptions& o) {
     glUniform3fv(glGetUniformLocation(prog, "base"), 1, o.color);
     glUniform3fv(glGetUniformLocation(prog, "ramp"), 17, ramp);
     if (m.has_uvs && o.uv_checker > 0) {
-      glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, m.ptex_uvs.get());
+      if (m.smooth_uvs)
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, m.uv_patches.get());
+      else
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, m.ptex_uvs.get());
       glUniform1f(glGetUniformLocation(prog, "uv_checker"), o.uv_checker);
     }
     if (o.texture) o.texture->bind(prog, o.texture_nearest ? 1 : 2);

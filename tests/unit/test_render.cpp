@@ -22,6 +22,8 @@
 #include "limn/subdiv/tessellate.hpp"
 #include "paint_oracle.hpp"
 
+#include "seam_cages.hpp"
+
 namespace limn {
 namespace {
 
@@ -726,6 +728,56 @@ TEST(Render, PatchUvCheckerFollowsTheUvs) {
   }
   EXPECT_GT(lit, 1000u);
   EXPECT_LT(differ, lit / 20);
+}
+
+// Smooth UVs on the GPU: each patch evaluates its face-varying patch. On the seamed torus in
+// mode "none" the image matches the CPU tessellation's (evaluate_face_varying) drawn as a mesh,
+// and differs from the linear UVs' image (so the shaders did not fall back to those).
+TEST(Render, PatchSmoothUvCheckerMatchesTheCpu) {
+  context();
+  Mesh cage = test::cube_islands();
+  cage.tags.fvar_boundary = int8_t(FVarInterpolation::none);
+  PatchOptions po;
+  po.subdiv = subdiv_options(cage);
+  ASSERT_EQ(po.subdiv.face_varying, FVarInterpolation::none);
+  po.depth = 2;
+  const PatchTable table = build_patches(cage, po);
+  const std::vector<float> points = table.points(cage.positions);
+  const Camera cam = frame_camera(cage, 240, 180);
+  RenderTarget target(240, 180, 1);
+  const float black[4] = {0, 0, 0, 1};
+  DrawOptions o;
+  o.uv_checker = 16.0f;
+  o.factor = 4;
+  auto draw = [&](auto& drawer) {
+    target.begin(black);
+    drawer.draw(cam, o);
+    return target.read_rgba();
+  };
+  PatchDrawer gpu(cage, table, points);
+  const std::vector<uint8_t> px = draw(gpu);
+  TessellateOptions to;
+  to.factor = 4;
+  MeshDrawer cpu(tessellate_patches(cage, table, points, to));
+  const std::vector<uint8_t> px_cpu = draw(cpu);
+  PatchOptions lo = po;
+  lo.subdiv.face_varying = FVarInterpolation::all;
+  const PatchTable linear = build_patches(cage, lo);
+  MeshDrawer cpu_linear(tessellate_patches(cage, linear, points, to));
+  const std::vector<uint8_t> px_linear = draw(cpu_linear);
+  size_t differ = 0, differ_linear = 0, lit = 0;
+  auto far = [&](const std::vector<uint8_t>& a, size_t i) {
+    return std::abs(int(px[i]) - int(a[i])) + std::abs(int(px[i + 1]) - int(a[i + 1])) > 40;
+  };
+  for (size_t i = 0; i < px.size(); i += 4) {
+    lit += px[i] + px[i + 1] + px[i + 2] > 0;
+    differ += far(px_cpu, i);
+    differ_linear += far(px_linear, i);
+  }
+  EXPECT_GT(lit, 3000u);
+  EXPECT_LT(differ, lit / 20);
+  EXPECT_GT(differ_linear, 2 * differ) << differ << " " << differ_linear << " " << lit;
+  EXPECT_GT(differ_linear, lit / 10);
 }
 
 }  // namespace

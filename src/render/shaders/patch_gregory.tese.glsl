@@ -1,9 +1,5 @@
-// patch_gregory.tese: Gregory end caps, as src/subdiv/patch_eval.cpp
-void bezier(float t, out vec4 w, out vec4 d) {
-  float s = 1.0 - t;
-  w = vec4(s * s * s, 3.0 * t * s * s, 3.0 * t * t * s, t * t * t);
-  d = vec4(-3.0 * s * s, 3.0 * s * s - 6.0 * t * s, 6.0 * t * s - 3.0 * t * t, 3.0 * t * t);
-}
+// patch_gregory.tese: Gregory end caps, as src/subdiv/patch_eval.cpp (bezier() is in
+// patch_eval.glsl)
 const ivec3 kSlot[12] = ivec3[12](ivec3(0, 0, 0), ivec3(1, 0, 1), ivec3(2, 0, 7), ivec3(3, 0, 5),
                                    ivec3(0, 1, 2), ivec3(3, 1, 6), ivec3(0, 2, 16), ivec3(3, 2, 12),
                                    ivec3(0, 3, 15), ivec3(1, 3, 17), ivec3(2, 3, 11),
