@@ -13,6 +13,8 @@
 // channel does not drive isolation, as in Far without considerFVarChannels), makes the channel's
 // patches: regular B-spline patches where its topology is regular (with boundary edges along
 // seams) and Gregory end caps where it is not, at the same level and place as each vertex patch.
+// One thing the channel's mesh cannot show: a value of a non-manifold cage vertex may look
+// manifold in it, yet its end-cap corners are sharp (Builder::set_sharp_corners).
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -49,12 +51,13 @@ std::vector<std::vector<uint64_t>> refined_faces(const PatchTable& t) {
 
 // The channel's mesh (see the file comment); `source` gets each of its vertices' value index.
 Mesh channel_mesh(const Mesh& cage, const SubdivOptions& o, const FaceVaryingInput& channel,
-                  std::vector<uint32_t>& source) {
+                  std::vector<uint32_t>& source, std::vector<uint8_t>& sharp_corners) {
   RefinedLevel L0;
   const Adj adj = cage_level(cage, o, L0);
   FVarState s = fvar_cage_state(o, L0, adj, channel.corner_values, channel.value_count);
   Mesh m;
   m.positions.assign(3 * s.value_count(), 0.0f);
+  sharp_corners.assign(s.value_count(), 0);
   m.face_offsets = cage.face_offsets;
   m.face_vertices = s.corner_value;
   for (uint32_t f = 0; f < L0.face_count(); ++f)
@@ -72,8 +75,10 @@ Mesh channel_mesh(const Mesh& cage, const SubdivOptions& o, const FaceVaryingInp
     for (uint32_t k = adj.veo[v]; k < adj.veo[v + 1]; ++k)
       if (const float x = L0.edge_sharpness[adj.ve[k]]; x < kInf)
         dependent = std::max(dependent, x);
+    const bool non_manifold = cage_vertex_non_manifold(adj, v);
     for (uint32_t x = s.offsets[v]; x < s.offsets[v + 1]; ++x) {
       const uint8_t t = s.tag[x];
+      sharp_corners[x] = non_manifold;
       float sharpness = L0.vertex_sharpness[v];
       if (t & kFvDepSharp) {
         sharpness = dependent;
@@ -98,13 +103,15 @@ FaceVaryingPatches build_face_varying_patches(const Mesh& cage, const PatchTable
   if (out.interpolation == FVarInterpolation::all) return out;
   if (table.ptex_of_face.size() != cage.face_count() + 1)
     throw InputError("face-varying patches: the patch table was built from another cage");
-  const Mesh m = channel_mesh(cage, options.subdiv, channel, out.source);
+  std::vector<uint8_t> sharp_corners;
+  const Mesh m = channel_mesh(cage, options.subdiv, channel, out.source, sharp_corners);
   PatchOptions po = options;
   po.subdiv.boundary = BoundaryInterpolation::edge_only;
   po.depth = 12;  // only a bound: the vertex table's refinement is replayed
   const std::vector<std::vector<uint64_t>> keys = refined_faces(table);
   Builder b(m, po, {});
   b.set_replay(&keys);
+  b.set_sharp_corners(sharp_corners);
   SparseRefinement r = isolate(m, po, b);
   b.build(out.table, r, nullptr);
   return out;

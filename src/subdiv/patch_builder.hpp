@@ -217,6 +217,8 @@ struct Level {
   Topo topo;
   CornerSharpness corner_sharpness;        // sharpness of each corner's edge (by corner)
   std::vector<uint8_t> rem;                // per vertex: levels still wanted around it
+  std::vector<uint8_t> sharp_corner;       // per vertex, when given: its end-cap corners are
+                                           // sharp whatever its ring (set_sharp_corners)
   std::vector<uint8_t> irregular;          // per vertex (complete ones only)
   std::vector<uint8_t> owned;              // per face: this level covers it (or a deeper one)
   std::vector<uint8_t> requested;          // per face: refined for its own sake
@@ -366,6 +368,9 @@ class Builder {
   /// Refines exactly the faces another build refined (face-varying patches follow their vertex
   /// patches): per level, the sorted face_key()s of the faces to refine.
   void set_replay(const std::vector<std::vector<uint64_t>>* keys) { replay_ = keys; }
+  /// Cage vertices (and the vertex points refined from them) whose end-cap corners are sharp
+  /// whatever their ring shows (face-varying values at non-manifold vertices, as OpenSubdiv).
+  void set_sharp_corners(std::span<const uint8_t> v) { sharp_corners_ = v; }
 
  private:
   RingView ring(Level& L, const RefinedLevel& R, uint32_t v) const;
@@ -391,6 +396,7 @@ class Builder {
   std::span<const uint8_t> depth_;
   std::span<const uint8_t> roles_;
   const std::vector<std::vector<uint64_t>>* replay_ = nullptr;
+  std::span<const uint8_t> sharp_corners_;
   bool replayed(size_t k, const Level::Face& f) const;
   std::vector<Level> levels_;
   std::vector<uint32_t> ptex_first_;  // ptex_offsets(cage_): becomes the table's ptex_of_face

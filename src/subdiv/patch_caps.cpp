@@ -162,6 +162,10 @@ uint32_t GregoryCap::emit_face_point(int i, bool plus, uint32_t p_row, uint32_t 
   if (plus ? k.fp_regular : k.fm_regular) {
     put(k.v, 4.0 / 9.0), put(c[(i + 3) & 3].v, 2.0 / 9.0), put(c[(i + 1) & 3].v, 2.0 / 9.0);
     put(c[(i + 2) & 3].v, 1.0 / 9.0);
+  } else if (k.sharp && c[far].sharp) {
+    // Between two sharp corners OpenSubdiv's face point is the near edge point (its converter
+    // gives that row two entries: the edge point's).
+    put(kCapRef | e_near, 1.0);
   } else {
     // Loop et al.'s face point: the corner's limit point and the two edge points meeting the
     // patch edge, and the rotation of the ring across it.

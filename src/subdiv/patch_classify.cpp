@@ -163,6 +163,7 @@ void Builder::span(const Level& L, const RefinedLevel& R, uint32_t corner, bool&
     sharp = corner_tag || (cut_sharp ? !crease : vs >= kInf);
     if (!sharp && e.boundary && n == 1) sharp = true;  // OpenSubdiv's legacy smooth corner
   }
+  if (!L.sharp_corner.empty() && L.sharp_corner[v]) sharp = true;
 }
 
 // Regular: the limit surface around the vertex is the B-spline of its ring (interior valence 4,
@@ -299,6 +300,17 @@ void Builder::request(size_t k, const SparseLevel& S, const LevelAdjacency& adj,
     for (uint32_t v : S.parent_vertices) L.rem[i++] = dec(P.rem[v]);
   }
 
+  if (!sharp_corners_.empty()) {
+    if (k == 0) {
+      L.sharp_corner.assign(sharp_corners_.begin(), sharp_corners_.end());
+    } else {
+      L.sharp_corner.assign(nv, 0);
+      const size_t first = S.parent_faces.size() + S.parent_edges.size();
+      for (size_t i = 0; i < S.parent_vertices.size(); ++i)
+        L.sharp_corner[first + i] = levels_[k - 1].sharp_corner[S.parent_vertices[i]];
+    }
+  }
+
   // Which faces this level covers, and their ptex placement.
   L.owned.assign(nf, 0);
   L.param.resize(nf);
@@ -368,6 +380,7 @@ void Builder::request(size_t k, const SparseLevel& S, const LevelAdjacency& adj,
   if (k > 0) {
     Level& P = levels_[k - 1];
     release(P.rem), release(P.requested), release(P.param), release(P.src), release(P.src_offsets);
+    release(P.sharp_corner);
     release(P.role);
   }
 }

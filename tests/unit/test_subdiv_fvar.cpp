@@ -425,21 +425,11 @@ std::string check_adaptive_smooth(const Mesh& cage, int depth, FVarInterpolation
 
 class FVarAdaptiveSmooth : public ::testing::TestWithParam<Case> {};
 
-// Where limn's end caps still differ from OpenSubdiv's (issue 27's note): on MonsterFrog, the
-// face points of level-0 end caps at UV junctions that modes 2-4 pin (spans of two faces), with
-// inf_sharp_patches; on the non-manifold fan, one end cap without it. Positions, edge points and
-// every other patch agree.
-bool known_difference(const std::string& name, int mode, bool inf_sharp) {
-  return (name == "monsterfrog" && mode >= 2 && inf_sharp) || (name == "catmark_fan" && !inf_sharp);
-}
-
 TEST_P(FVarAdaptiveSmooth, UvsMatchOpenSubdivsPatches) {
   const Mesh cage = read_mesh(GetParam().path);
-  for (bool inf_sharp : {false, true}) {
-    if (known_difference(GetParam().path.stem().string(), GetParam().mode, inf_sharp)) continue;
+  for (bool inf_sharp : {false, true})
     EXPECT_EQ(check_adaptive_smooth(cage, 3, FVarInterpolation(GetParam().mode), inf_sharp), "")
         << "inf_sharp_patches " << inf_sharp;
-  }
 }
 
 std::vector<Case> smooth_cases() {
