@@ -5,7 +5,9 @@
 //              leanest way to a level's points and UVs), single-threaded;
 //   limn full: refine_uniform with the channel (every level, its stencils and its face-varying
 //              stencils kept) + the last level's positions and UVs;
-//   limn lean: subdivide_uniform (only the last level kept; carries the UVs).
+//   limn lean: subdivide_uniform (only the last level kept; carries the UVs);
+//   osd tables: the same kept as tables: StencilTableFactory's last-level stencils over the cage,
+//              vertex and face-varying, applied (what limn full is measured against).
 // And the same three without the channel, so the UVs' own cost shows. Models: the car and BigGuy
 // (their own UVs) and the 800k-quad terrain (planar UVs cut by a seam down the middle). Modes:
 // OpenSubdiv's default (linear all) and "none" (smooth UVs, the most work).
@@ -68,6 +70,34 @@ size_t osd_run(const limn::Mesh& m, int level, limn::FVarInterpolation mode, boo
     t.swap(tn);
   }
   return p.size() + (uv ? t.size() : 0);
+}
+
+// The same job kept as tables for animated cages, OpenSubdiv's way: StencilTableFactory (the last
+// level's stencils over the cage, vertex and face-varying) after RefineUniform, then applied.
+size_t osd_tables(const limn::Mesh& m, int level, limn::FVarInterpolation mode, bool uv) {
+  const std::unique_ptr<Far::TopologyRefiner> r = limn::bench::osd_refiner(m, uv, mode);
+  Far::TopologyRefiner::UniformOptions uo(level);
+  uo.fullTopologyInLastLevel = false;
+  r->RefineUniform(uo);
+  Far::StencilTableFactory::Options so;
+  so.generateIntermediateLevels = false;
+  so.generateOffsets = true;
+  std::unique_ptr<const Far::StencilTable> st(Far::StencilTableFactory::Create(*r, so));
+  std::vector<Value<3>> p(m.vertex_count()), pn(size_t(st->GetNumStencils()));
+  for (size_t v = 0; v < m.vertex_count(); ++v)
+    p[v] = {{m.positions[3 * v], m.positions[3 * v + 1], m.positions[3 * v + 2]}};
+  st->UpdateValues(p.data(), pn.data());
+  size_t n = pn.size();
+  if (uv) {
+    so.interpolationMode = Far::StencilTableFactory::INTERPOLATE_FACE_VARYING;
+    so.fvarChannel = 0;
+    std::unique_ptr<const Far::StencilTable> ft(Far::StencilTableFactory::Create(*r, so));
+    std::vector<Value<2>> t(m.uvs.size() / 2), tn(size_t(ft->GetNumStencils()));
+    for (size_t i = 0; i < t.size(); ++i) t[i] = {{m.uvs[2 * i], m.uvs[2 * i + 1]}};
+    ft->UpdateValues(t.data(), tn.data());
+    n += tn.size();
+  }
+  return n;
 }
 
 size_t limn_full(const limn::Mesh& m, int level, limn::FVarInterpolation mode, bool uv) {
@@ -185,9 +215,10 @@ void row(const std::string& label, int level, const char* uv, const std::string&
     const limn::bench::Outcome again = limn::bench::run_isolated(fn, cap_gb);
     if (again.ok && again.ms < o.ms) o.ms = again.ms;
   }
-  if (who == "osd") osd = o;
+  const bool peer = who.starts_with("osd");
+  if (peer) osd = o;
   std::string note = o.why;
-  if (o.ok && osd.ok && who != "osd")
+  if (o.ok && osd.ok && !peer)
     note = fmt::format("time {:.2f}x, memory {:.2f}x", osd.ms / o.ms, osd.peak_mb / o.peak_mb);
   fmt::print("{:<10} {:<5} {:<6} {:<12} {:>10} {:>9.1f} {:>9.0f}  {}\n", label, level, uv, who,
              o.points, o.ms, o.peak_mb, note);
@@ -228,14 +259,18 @@ int main(int argc, char** argv) {
           std::tuple{"all", limn::FVarInterpolation::all, true},
           std::tuple{"none", limn::FVarInterpolation::none, true}}) {
       limn::bench::Outcome osd;
-      for (const char* who : {"osd", "limn full", "limn lean"}) {
+      limn::bench::Outcome osd_table;
+      for (const char* who : {"osd", "limn lean", "osd tables", "limn full"}) {
         const std::string w = who;
         const auto fn = [&, mode = mode, uv = uv]() -> size_t {
           if (w == "osd") return osd_run(m, level, mode, uv);
+          if (w == "osd tables") return osd_tables(m, level, mode, uv);
           if (w == "limn full") return limn_full(m, level, mode, uv);
           return limn_lean(uv ? m : plain, level, mode);
         };
-        row(label, level, mode_name, who, fn, cap_gb, osd);
+        // The lean path against PrimvarRefiner, the tables against Far's stencil tables.
+        const bool tables = w == "osd tables" || w == "limn full";
+        row(label, level, mode_name, who, fn, cap_gb, tables ? osd_table : osd);
       }
     }
   }
