@@ -277,9 +277,15 @@ int main(int argc, char** argv) {
   // Adaptive: depth 3 (OpenSubdiv's default isolation is 2-4 for drawing).
   fmt::print("\n{:<10} {:<5} {:<6} {:<12} {:>10} {:>9} {:>9}  {}\n", "model", "depth", "uv", "who",
              "count", "ms", "peak MB", "OpenSubdiv/limn");
-  for (const char* name : {"osd/catmark_car.obj", "quads/bigguy.obj"}) {
-    if (!std::filesystem::exists(models / name)) continue;
-    limn::Mesh m = limn::read_mesh(models / name);
+  for (const std::string name : {"osd/catmark_car.obj", "quads/bigguy.obj", "terrain"}) {
+    limn::Mesh m;
+    if (name == "terrain") {
+      m = limn::make_shape("terrain");
+      terrain_uvs(m);
+    } else {
+      if (!std::filesystem::exists(models / name)) continue;
+      m = limn::read_mesh(models / name);
+    }
     m.normals.clear(), m.normal_indices.clear(), m.colors.clear();
     const std::string label = std::filesystem::path(name).stem().string();
     for (const auto& [uv, smooth] : {std::pair{false, false}, {true, false}, {true, true}}) {

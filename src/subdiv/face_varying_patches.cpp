@@ -29,24 +29,23 @@ using namespace patch_detail;
 
 namespace {
 
-// Per level, the sorted keys of the faces `t` refined: every ancestor of a patch.
-std::vector<std::vector<uint64_t>> refined_faces(const PatchTable& t) {
-  std::vector<std::vector<uint64_t>> keys;
+// The faces `t` refined (every ancestor of a patch), as Replay holds them.
+void refined_faces(const PatchTable& t, Replay& r) {
+  r.cage.assign(t.ptex_count, 0);
   auto add = [&](const PatchParam& p) {
-    if (keys.size() < p.level) keys.resize(p.level);
-    if (p.level > 0) keys[0].push_back(face_key(t.ptex_of_face.at(p.base_face), 0, 0));
+    if (r.keys.size() < p.level) r.keys.resize(p.level);
+    if (p.level > 0) r.cage[t.ptex_of_face.at(p.base_face)] = 1;
     for (uint32_t k = 1; k < p.level; ++k) {
       const uint32_t shift = p.level - k;
-      keys[k].push_back(face_key(p.ptex, uint32_t(p.u) >> shift, uint32_t(p.v) >> shift));
+      r.keys[k].push_back(face_key(p.ptex, uint32_t(p.u) >> shift, uint32_t(p.v) >> shift));
     }
   };
   for (const PatchParam& p : t.regular_params) add(p);
   for (const PatchParam& p : t.gregory_params) add(p);
-  for (std::vector<uint64_t>& level : keys) {
+  for (std::vector<uint64_t>& level : r.keys) {
     std::sort(level.begin(), level.end());
     level.erase(std::unique(level.begin(), level.end()), level.end());
   }
-  return keys;
 }
 
 // The channel's mesh (see the file comment); `source` gets each of its vertices' value index.
@@ -75,7 +74,10 @@ Mesh channel_mesh(const Mesh& cage, const SubdivOptions& o, const FaceVaryingInp
     for (uint32_t k = adj.veo[v]; k < adj.veo[v + 1]; ++k)
       if (const float x = L0.edge_sharpness[adj.ve[k]]; x < kInf)
         dependent = std::max(dependent, x);
-    const bool non_manifold = cage_vertex_non_manifold(adj, v);
+    // Only mismatched values can be sharp for it (every value of a non-manifold vertex is).
+    const bool non_manifold = s.offsets[v + 1] > s.offsets[v] &&
+                              (s.tag[s.offsets[v]] & kFvMismatch) &&
+                              cage_vertex_non_manifold(adj, v);
     for (uint32_t x = s.offsets[v]; x < s.offsets[v + 1]; ++x) {
       const uint8_t t = s.tag[x];
       sharp_corners[x] = non_manifold;
@@ -103,17 +105,13 @@ FaceVaryingPatches build_face_varying_patches(const Mesh& cage, const PatchTable
   if (out.interpolation == FVarInterpolation::all) return out;
   if (table.ptex_of_face.size() != cage.face_count() + 1)
     throw InputError("face-varying patches: the patch table was built from another cage");
-  std::vector<uint8_t> sharp_corners;
-  const Mesh m = channel_mesh(cage, options.subdiv, channel, out.source, sharp_corners);
+  Replay replay;
+  const Mesh m = channel_mesh(cage, options.subdiv, channel, out.source, replay.sharp_corners);
   PatchOptions po = options;
   po.subdiv.boundary = BoundaryInterpolation::edge_only;
   po.depth = 12;  // only a bound: the vertex table's refinement is replayed
-  const std::vector<std::vector<uint64_t>> keys = refined_faces(table);
-  Builder b(m, po, {});
-  b.set_replay(&keys);
-  b.set_sharp_corners(sharp_corners);
-  SparseRefinement r = isolate(m, po, b);
-  b.build(out.table, r, nullptr);
+  refined_faces(table, replay);
+  out.table = build_replayed(m, po, replay);
   return out;
 }
 

@@ -349,6 +349,15 @@ class GregoryCap {
                            StencilTable& table, detail::SharedWeights& shared) const;
 };
 
+// What a replayed build (face-varying patches) follows: the faces to refine, level 0's by their
+// cage ptex face (the first of a non-quad's), the others' as per-level sorted face_key()s; and
+// per cage vertex whether its end-cap corners are sharp (may be empty).
+struct Replay {
+  std::vector<uint8_t> cage;
+  std::vector<std::vector<uint64_t>> keys;
+  std::vector<uint8_t> sharp_corners;
+};
+
 class Builder {
  public:
   Builder(const Mesh& cage, const PatchOptions& o, std::span<const uint8_t> depth,
@@ -366,8 +375,11 @@ class Builder {
   /// Region builds: the role of each cage face (see Level::role).
   void set_roles(std::span<const uint8_t> roles) { roles_ = roles; }
   /// Refines exactly the faces another build refined (face-varying patches follow their vertex
-  /// patches): per level, the sorted face_key()s of the faces to refine.
-  void set_replay(const std::vector<std::vector<uint64_t>>* keys) { replay_ = keys; }
+  /// patches). Region builds give the cage's first ptex face of each of their sub-cage's faces,
+  /// as the replay names them.
+  void set_replay(const Replay* replay, std::span<const uint32_t> cage_ptex = {}) {
+    replay_ = replay, replay_ptex_ = cage_ptex;
+  }
   /// Cage vertices (and the vertex points refined from them) whose end-cap corners are sharp
   /// whatever their ring shows (face-varying values at non-manifold vertices, as OpenSubdiv).
   void set_sharp_corners(std::span<const uint8_t> v) { sharp_corners_ = v; }
@@ -395,7 +407,8 @@ class Builder {
   PatchOptions o_;
   std::span<const uint8_t> depth_;
   std::span<const uint8_t> roles_;
-  const std::vector<std::vector<uint64_t>>* replay_ = nullptr;
+  const Replay* replay_ = nullptr;
+  std::span<const uint32_t> replay_ptex_;
   std::span<const uint8_t> sharp_corners_;
   bool replayed(size_t k, const Level::Face& f) const;
   std::vector<Level> levels_;
@@ -504,6 +517,8 @@ void reserve_more(V& v, size_t more) {
 void resolve_cap_points(PatchTable& t);
 /// Joins the levels' regular points into the table and drops the points no patch reads.
 void prune_points(PatchTable& t, std::span<std::vector<uint32_t>> regular_points);
+/// build_patches (whole cage or regions, as it chooses) refining as `replay` says.
+PatchTable build_replayed(const Mesh& cage, const PatchOptions& options, const Replay& replay);
 /// Throws InputError for an isolation depth out of range.
 void check_depth(const PatchOptions& options);
 /// The sparse refinement of the cage that `b` requests and emits patches from.

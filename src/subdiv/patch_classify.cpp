@@ -268,9 +268,15 @@ void Builder::aligned_corners(const Level& L, const RefinedLevel& R, uint32_t f,
 }
 
 bool Builder::replayed(size_t k, const Level::Face& f) const {
-  if (k >= replay_->size()) return false;
-  const std::vector<uint64_t>& keys = (*replay_)[k];
-  return std::binary_search(keys.begin(), keys.end(), face_key(f.ptex, f.u, f.v));
+  uint32_t ptex = f.ptex;
+  if (!replay_ptex_.empty()) {
+    const uint32_t face = base_face(ptex);
+    ptex = replay_ptex_[face] + (ptex - ptex_first_[face]);
+  }
+  if (k == 0) return ptex < replay_->cage.size() && replay_->cage[ptex];
+  if (k >= replay_->keys.size()) return false;
+  const std::vector<uint64_t>& keys = replay_->keys[k];
+  return std::binary_search(keys.begin(), keys.end(), face_key(ptex, f.u, f.v));
 }
 
 void Builder::request(size_t k, const SparseLevel& S, const LevelAdjacency& adj,

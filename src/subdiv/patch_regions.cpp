@@ -30,15 +30,18 @@ struct Region {
   std::vector<uint32_t> faces;     // cage faces of the sub-cage, the region's first
   std::vector<uint32_t> vertices;  // cage vertex of each sub-cage vertex
   std::vector<uint8_t> roles, depth;
-  Mesh mesh;  // the sub-cage (dropped once isolated)
+  std::vector<uint8_t> sharp_corners;  // replayed builds: per sub-cage vertex
+  std::vector<uint32_t> ptex;          // replayed builds: the cage's first ptex face of each face
+  Mesh mesh;                           // the sub-cage (dropped once isolated)
   PatchTable table;
   PatchStats stats;
 };
 
 class RegionBuilder {
  public:
-  RegionBuilder(const Mesh& cage, const PatchOptions& o, std::span<const uint8_t> depth)
-      : cage_(cage), o_(o), depth_(depth) {
+  RegionBuilder(const Mesh& cage, const PatchOptions& o, std::span<const uint8_t> depth,
+                const Replay* replay = nullptr)
+      : cage_(cage), o_(o), depth_(depth), replay_(replay) {
     const size_t nf = cage.face_count(), nv = cage.vertex_count(), nc = cage.corner_count();
     // Faces around each vertex (all the regions need of the cage's topology: 8 bytes a corner).
     vertex_face_offsets_.assign(nv + 1, 0);
@@ -71,6 +74,7 @@ class RegionBuilder {
               fmt::format("crease tag {} names vertices {} and {}, which share no edge", i, a, b));
       }
     }
+    if (!cage.corner_vertices.empty()) corner_sharpness_.assign(nv, 0.0f);
     for (size_t i = 0; i < cage.corner_vertices.size(); ++i)  // a later tag wins
       corner_sharpness_[cage.corner_vertices[i]] = std::min(cage.corner_sharpness[i], kInf);
     face_state_.assign(nf, 0);
@@ -196,14 +200,18 @@ class RegionBuilder {
     for (size_t i = 0; i < verts.size(); ++i) {
       std::copy_n(&cage_.positions[3 * size_t(verts[i])], 3, &m.positions[3 * i]);
       if (corner_sharpness_.empty()) continue;
-      const auto it = corner_sharpness_.find(verts[i]);
-      if (it != corner_sharpness_.end() && it->second > 0.0f) {
+      if (const float x = corner_sharpness_[verts[i]]; x > 0.0f) {
         m.corner_vertices.push_back(uint32_t(i));
-        m.corner_sharpness.push_back(it->second);
+        m.corner_sharpness.push_back(x);
       }
     }
     if (!depth_.empty())
       for (const uint32_t v : verts) r.depth.push_back(depth_[v]);
+    if (replay_) {
+      for (const uint32_t f : faces) r.ptex.push_back(out_.ptex_of_face[f]);
+      if (!replay_->sharp_corners.empty())
+        for (const uint32_t v : verts) r.sharp_corners.push_back(replay_->sharp_corners[v]);
+    }
     for (const uint32_t f : faces) face_state_[f] &= uint8_t(~kCut);
     for (const uint32_t v : verts) vertex_local_[v] = kNone;
   }
@@ -214,6 +222,10 @@ class RegionBuilder {
     {
       Builder b(r.mesh, o_, r.depth);
       b.set_roles(r.roles);
+      if (replay_) {
+        b.set_replay(replay_, r.ptex);
+        b.set_sharp_corners(r.sharp_corners);
+      }
       b.set_stats(&r.stats);
       SparseRefinement s = isolate(r.mesh, o_, b);
       b.build(r.table, s, &r.stats);
@@ -388,9 +400,10 @@ class RegionBuilder {
   const Mesh& cage_;
   PatchOptions o_;
   std::span<const uint8_t> depth_;
+  const Replay* replay_;
   std::vector<uint32_t> vertex_face_offsets_, vertex_faces_;
   std::unordered_map<uint64_t, Crease> creases_;
-  std::unordered_map<uint32_t, float> corner_sharpness_;  // tagged cage vertices
+  std::vector<float> corner_sharpness_;  // per cage vertex when any is tagged (a later tag wins)
   // Per cage face: kDone once a region has taken it as its own, kCut while in the region being
   // cut, kHole for a hole.
   static constexpr uint8_t kDone = 1, kCut = 2, kHole = 4;
@@ -403,6 +416,27 @@ class RegionBuilder {
 };
 
 }  // namespace
+
+namespace patch_detail {
+
+PatchTable build_replayed(const Mesh& cage, const PatchOptions& options, const Replay& replay) {
+  const size_t nf = cage.face_count();
+  const uint32_t batch = options.batch_faces ? options.batch_faces : kDefaultBatch;
+  if (options.batch_faces ? nf > batch : nf > 2 * size_t(batch)) {
+    validate(cage, "cage");
+    RegionBuilder rb(cage, options, {}, &replay);
+    return rb.run(batch, nullptr);
+  }
+  Builder b(cage, options, {});
+  b.set_replay(&replay);
+  b.set_sharp_corners(replay.sharp_corners);
+  SparseRefinement r = isolate(cage, options, b);
+  PatchTable out;
+  b.build(out, r, nullptr);
+  return out;
+}
+
+}  // namespace patch_detail
 
 PatchTable build_patches(const Mesh& cage, const PatchOptions& options,
                          std::span<const uint8_t> vertex_depth, PatchStats* stats) {

@@ -307,7 +307,7 @@ void check_adaptive_linear(const Mesh& cage, int depth) {
 // off: regular patches and Gregory end caps over the channel's values and its local points),
 // values and derivatives, on the same vertex patches (limn's options set as OpenSubdiv's).
 std::string check_adaptive_smooth(const Mesh& cage, int depth, FVarInterpolation mode,
-                                  bool inf_sharp) {
+                                  bool inf_sharp, uint32_t batch_faces = 0) {
   namespace osd = test::osd;
   SubdivOptions opt = subdiv_options(cage);
   opt.face_varying = mode;
@@ -351,6 +351,7 @@ std::string check_adaptive_smooth(const Mesh& cage, int depth, FVarInterpolation
   lo.depth = depth;
   lo.inf_sharp_patches = inf_sharp;
   lo.single_crease_patches = false;
+  lo.batch_faces = batch_faces;
   const PatchTable mine_table = build_patches(cage, lo);
   if (int(mine_table.patch_count()) != table->GetNumPatchesTotal())
     return fmt::format("{} vertex patches, OpenSubdiv {}", mine_table.patch_count(),
@@ -448,6 +449,19 @@ INSTANTIATE_TEST_SUITE_P(Models, FVarAdaptiveSmooth, ::testing::ValuesIn(smooth_
                            return name;
                          });
 GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(FVarAdaptiveSmooth);
+
+// Region builds (large cages are cut into batches of faces) replay the vertex table's regions'
+// refinement: the same patches, held to OpenSubdiv the same way.
+TEST(FVarAdaptiveBuilt, RegionBuildsMatchOpenSubdivsPatches) {
+  for (const char* name : {"osd/catmark_car.obj", "quads/monsterfrog.obj"}) {
+    const fs::path path = fs::path(LIMN_SHARED_MODELS) / name;
+    if (!fs::exists(path)) GTEST_SKIP() << "no shared models";
+    const Mesh cage = read_mesh(path);
+    for (int mode : {0, 3})
+      EXPECT_EQ(check_adaptive_smooth(cage, 3, FVarInterpolation(mode), true, 64), "")
+          << name << " mode " << mode;
+  }
+}
 
 TEST(FVarAdaptiveBuilt, SmoothSeamCagesMatchOpenSubdivsPatches) {
   for (const Mesh& cage : {test::cube_islands(), test::torus_seams(), test::dart_grid()})
