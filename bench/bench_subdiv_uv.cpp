@@ -206,6 +206,20 @@ void terrain_uvs(limn::Mesh& m) {
   }
 }
 
+// A case's mesh: the procedural terrain with its seamed UVs, or a shared model (false when the
+// shared models are absent).
+bool load(const std::string& name, limn::Mesh& m) {
+  if (name == "terrain") {
+    m = limn::make_shape("terrain");
+    terrain_uvs(m);
+    return true;
+  }
+  const std::filesystem::path path = std::filesystem::path(LIMN_SHARED_MODELS) / name;
+  if (!std::filesystem::exists(path)) return false;
+  m = limn::read_mesh(path);
+  return true;
+}
+
 // Runs one case (small ones, taking milliseconds, as the best of five fresh processes) and
 // prints its row; OpenSubdiv's row comes first and is kept in `osd` for the ratios.
 void row(const std::string& label, int level, const char* uv, const std::string& who,
@@ -234,7 +248,6 @@ int main(int argc, char** argv) {
     if (std::string(argv[i]) == "--cap-gb" && i + 1 < argc) cap_gb = std::atof(argv[++i]);
     if (std::string(argv[i]) == "--adaptive-only") uniform = false;
   }
-  const std::filesystem::path models = LIMN_SHARED_MODELS;
   std::vector<std::pair<std::string, int>> cases = {
       {"osd/catmark_car.obj", 3}, {"quads/bigguy.obj", 3}, {"terrain", 2}};
   fmt::print("{:<10} {:<5} {:<6} {:<12} {:>10} {:>9} {:>9}  {}\n", "model", "level", "uv", "who",
@@ -242,13 +255,7 @@ int main(int argc, char** argv) {
   for (const auto& [name, level] : cases) {
     if (!uniform) break;
     limn::Mesh m;
-    if (name == "terrain") {
-      m = limn::make_shape("terrain");
-      terrain_uvs(m);
-    } else {
-      if (!std::filesystem::exists(models / name)) continue;
-      m = limn::read_mesh(models / name);
-    }
+    if (!load(name, m)) continue;
     // Only positions, tags and the UVs go in (BigGuy's normals would be a second channel).
     m.normals.clear(), m.normal_indices.clear(), m.colors.clear();
     limn::Mesh plain = m;
@@ -279,13 +286,7 @@ int main(int argc, char** argv) {
              "count", "ms", "peak MB", "OpenSubdiv/limn");
   for (const std::string name : {"osd/catmark_car.obj", "quads/bigguy.obj", "terrain"}) {
     limn::Mesh m;
-    if (name == "terrain") {
-      m = limn::make_shape("terrain");
-      terrain_uvs(m);
-    } else {
-      if (!std::filesystem::exists(models / name)) continue;
-      m = limn::read_mesh(models / name);
-    }
+    if (!load(name, m)) continue;
     m.normals.clear(), m.normal_indices.clear(), m.colors.clear();
     const std::string label = std::filesystem::path(name).stem().string();
     for (const auto& [uv, smooth] : {std::pair{false, false}, {true, false}, {true, true}}) {

@@ -94,6 +94,30 @@ Mesh channel_mesh(const Mesh& cage, const SubdivOptions& o, const FaceVaryingInp
   return m;
 }
 
+// Components [k0, k0 + kn) (kn <= 3) of the channel's values as the points of its table, and
+// those points pushed through it (PatchTable::points).
+std::vector<float> channel_points(const FaceVaryingPatches& patches, const float* values, size_t w,
+                                  size_t k0, size_t kn) {
+  const size_t nv = patches.source.size();
+  std::vector<float> cage_points(3 * nv, 0.0f);
+  for (size_t x = 0; x < nv; ++x)
+    for (size_t k = 0; k < kn; ++k)
+      cage_points[3 * x + k] = values[size_t(patches.source[x]) * w + k0 + k];
+  return patches.table.points(cage_points);
+}
+
+// Copies components [k0, k0 + kn) of n results (3 floats each) into outputs of w floats each.
+void scatter(size_t n, size_t w, size_t k0, size_t kn, const std::vector<float>& p,
+             const std::vector<float>& pu, const std::vector<float>& pv, float* out, float* du,
+             float* dv) {
+  for (size_t i = 0; i < n; ++i)
+    for (size_t k = 0; k < kn; ++k) {
+      out[i * w + k0 + k] = p[3 * i + k];
+      if (du) du[i * w + k0 + k] = pu[3 * i + k];
+      if (dv) dv[i * w + k0 + k] = pv[3 * i + k];
+    }
+}
+
 }  // namespace
 
 FaceVaryingPatches build_face_varying_patches(const Mesh& cage, const PatchTable& table,
@@ -127,23 +151,14 @@ void evaluate_face_varying(const Mesh& cage, const FaceVaryingInput& channel,
   std::vector<PatchCoord> at(coords.size());
   for (size_t i = 0; i < coords.size(); ++i)
     at[i] = map.find(coords[i].ptex, coords[i].u, coords[i].v);
-  const size_t w = size_t(width), n = coords.size(), nv = patches.source.size();
+  const size_t w = size_t(width), n = coords.size();
   // Three components at a time, as points.
-  std::vector<float> cage_points(3 * nv), p(3 * n), pu(du ? 3 * n : 0), pv(dv ? 3 * n : 0);
+  std::vector<float> p(3 * n), pu(du ? 3 * n : 0), pv(dv ? 3 * n : 0);
   for (size_t k0 = 0; k0 < w; k0 += 3) {
     const size_t kn = std::min<size_t>(3, w - k0);
-    std::fill(cage_points.begin(), cage_points.end(), 0.0f);
-    for (size_t x = 0; x < nv; ++x)
-      for (size_t k = 0; k < kn; ++k)
-        cage_points[3 * x + k] = values[size_t(patches.source[x]) * w + k0 + k];
-    const std::vector<float> points = t.points(cage_points);
-    evaluate_patches(t, points, at, p.data(), du ? pu.data() : nullptr, dv ? pv.data() : nullptr);
-    for (size_t i = 0; i < n; ++i)
-      for (size_t k = 0; k < kn; ++k) {
-        out[i * w + k0 + k] = p[3 * i + k];
-        if (du) du[i * w + k0 + k] = pu[3 * i + k];
-        if (dv) dv[i * w + k0 + k] = pv[3 * i + k];
-      }
+    evaluate_patches(t, channel_points(patches, values, w, k0, kn), at, p.data(),
+                     du ? pu.data() : nullptr, dv ? pv.data() : nullptr);
+    scatter(n, w, k0, kn, p, pu, pv, out, du, dv);
   }
 }
 
@@ -161,23 +176,13 @@ void evaluate_face_varying_grids(const Mesh& cage, const FaceVaryingInput& chann
     // The channel's own table has the cage's ptex faces: evaluate_grids over it, three
     // components at a time.
     const PatchTable& t = patches.table;
-    const size_t total = size_t(t.ptex_count) * nn, nv = patches.source.size();
-    std::vector<float> cage_points(3 * nv), p(3 * total), pu(du ? 3 * total : 0),
-        pv(dv ? 3 * total : 0);
+    const size_t total = size_t(t.ptex_count) * nn;
+    std::vector<float> p(3 * total), pu(du ? 3 * total : 0), pv(dv ? 3 * total : 0);
     for (size_t k0 = 0; k0 < w; k0 += 3) {
       const size_t kn = std::min<size_t>(3, w - k0);
-      std::fill(cage_points.begin(), cage_points.end(), 0.0f);
-      for (size_t x = 0; x < nv; ++x)
-        for (size_t k = 0; k < kn; ++k)
-          cage_points[3 * x + k] = values[size_t(patches.source[x]) * w + k0 + k];
-      evaluate_grids(t, t.points(cage_points), n, p.data(), du ? pu.data() : nullptr,
-                     dv ? pv.data() : nullptr);
-      for (size_t i = 0; i < total; ++i)
-        for (size_t k = 0; k < kn; ++k) {
-          out[i * w + k0 + k] = p[3 * i + k];
-          if (du) du[i * w + k0 + k] = pu[3 * i + k];
-          if (dv) dv[i * w + k0 + k] = pv[3 * i + k];
-        }
+      evaluate_grids(t, channel_points(patches, values, w, k0, kn), n, p.data(),
+                     du ? pu.data() : nullptr, dv ? pv.data() : nullptr);
+      scatter(total, w, k0, kn, p, pu, pv, out, du, dv);
     }
     return;
   }

@@ -157,6 +157,14 @@ struct Case {
   int mode;
 };
 
+// A test name for a case: the cage's stem and the mode.
+std::string case_name(const ::testing::TestParamInfo<Case>& p) {
+  std::string name = p.param.path.stem().string() + "_mode" + std::to_string(p.param.mode);
+  for (char& c : name)
+    if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+  return name;
+}
+
 std::vector<Case> model_cases() {
   std::vector<Case> out;
   for (const fs::path& p : cages_with_uvs())
@@ -172,14 +180,7 @@ TEST_P(FVarModel, MatchesOpenSubdiv) {
   check_cage(cage, depth, static_cast<FVarInterpolation>(GetParam().mode));
 }
 
-INSTANTIATE_TEST_SUITE_P(Models, FVarModel, ::testing::ValuesIn(model_cases()),
-                         [](const ::testing::TestParamInfo<Case>& p) {
-                           std::string name = p.param.path.stem().string() + "_mode" +
-                                              std::to_string(p.param.mode);
-                           for (char& c : name)
-                             if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-                           return name;
-                         });
+INSTANTIATE_TEST_SUITE_P(Models, FVarModel, ::testing::ValuesIn(model_cases()), case_name);
 GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(FVarModel);
 
 TEST(FVarModels, SharedCagesWithUvsPresent) {
@@ -220,6 +221,39 @@ TEST(FVarBuilt, TorusSeamsHaveAJunction) {
   EXPECT_EQ(four, 1u);
 }
 
+// Every adaptive level's UVs in one buffer (OpenSubdiv's patch tables index them so), with room
+// for `extra` values after them.
+std::vector<test::OsdUv> osd_level_uvs(const test::osd::Far::TopologyRefiner& refiner,
+                                       const Mesh& cage, size_t extra) {
+  std::vector<test::OsdUv> uv(size_t(refiner.GetNumFVarValuesTotal(0)) + extra);
+  for (size_t i = 0; i < cage.uvs.size() / 2; ++i) uv[i] = {cage.uvs[2 * i], cage.uvs[2 * i + 1]};
+  const test::osd::Far::PrimvarRefiner primvar(refiner);
+  test::OsdUv* src = uv.data();
+  for (int k = 1; k <= refiner.GetMaxLevel(); ++k) {
+    test::OsdUv* dst = src + refiner.GetLevel(k - 1).GetNumFVarValues(0);
+    primvar.InterpolateFaceVarying(k, src, dst, 0);
+    src = dst;
+  }
+  return uv;
+}
+
+// A flat 4 x 4 grid of unit quads whose UVs are its (x, y).
+Mesh flat_grid() {
+  Mesh grid;
+  const int n = 4;
+  for (int y = 0; y <= n; ++y)
+    for (int x = 0; x <= n; ++x) grid.add_vertex(float(x), float(y), 0.0f);
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x) {
+      const uint32_t v = uint32_t((n + 1) * y + x);
+      grid.add_face({v, v + 1, v + uint32_t(n) + 2, v + uint32_t(n) + 1});
+    }
+  for (size_t v = 0; v < grid.vertex_count(); ++v)
+    grid.uvs.insert(grid.uvs.end(), {grid.positions[3 * v], grid.positions[3 * v + 1]});
+  grid.uv_indices = grid.face_vertices;
+  return grid;
+}
+
 // Adaptive surfaces, linear channel (FVarInterpolation::all, OpenSubdiv's default): UVs at ptex
 // coordinates against OpenSubdiv's face-varying patch table (Far::PatchTableFactory with
 // generateFVarTables, its legacy linear patches over InterpolateFaceVarying's values at every
@@ -236,16 +270,7 @@ void check_adaptive_linear(const Mesh& cage, int depth) {
   std::unique_ptr<osd::Far::PatchTable> table(osd::Far::PatchTableFactory::Create(*refiner, po));
   ASSERT_TRUE(table);
   ASSERT_EQ(table->GetNumFVarChannels(), 1);
-  // Every level's values, one buffer (the patch table indexes them so).
-  std::vector<test::OsdUv> uv(size_t(refiner->GetNumFVarValuesTotal(0)));
-  for (size_t i = 0; i < cage.uvs.size() / 2; ++i) uv[i] = {cage.uvs[2 * i], cage.uvs[2 * i + 1]};
-  const osd::Far::PrimvarRefiner primvar(*refiner);
-  test::OsdUv* src = uv.data();
-  for (int k = 1; k <= refiner->GetMaxLevel(); ++k) {
-    test::OsdUv* dst = src + refiner->GetLevel(k - 1).GetNumFVarValues(0);
-    primvar.InterpolateFaceVarying(k, src, dst, 0);
-    src = dst;
-  }
+  const std::vector<test::OsdUv> uv = osd_level_uvs(*refiner, cage, 0);
   ASSERT_EQ(table->GetLocalPointFaceVaryingStencilTable(0) == nullptr ||
                 table->GetLocalPointFaceVaryingStencilTable(0)->GetNumStencils() == 0,
             true)
@@ -328,15 +353,8 @@ std::string check_adaptive_smooth(const Mesh& cage, int depth, FVarInterpolation
   // Every level's values, then the channel's local points (end caps).
   const auto* local = table->GetLocalPointFaceVaryingStencilTable<float>(0);
   const size_t refined = size_t(refiner->GetNumFVarValuesTotal(0));
-  std::vector<test::OsdUv> uv(refined + (local ? size_t(local->GetNumStencils()) : 0));
-  for (size_t i = 0; i < cage.uvs.size() / 2; ++i) uv[i] = {cage.uvs[2 * i], cage.uvs[2 * i + 1]};
-  const osd::Far::PrimvarRefiner primvar(*refiner);
-  test::OsdUv* src = uv.data();
-  for (int k = 1; k <= refiner->GetMaxLevel(); ++k) {
-    test::OsdUv* dst = src + refiner->GetLevel(k - 1).GetNumFVarValues(0);
-    primvar.InterpolateFaceVarying(k, src, dst, 0);
-    src = dst;
-  }
+  std::vector<test::OsdUv> uv =
+      osd_level_uvs(*refiner, cage, local ? size_t(local->GetNumStencils()) : 0);
   for (int i = 0; local && i < local->GetNumStencils(); ++i) {
     const auto st = local->GetStencil(i);
     double acc[2] = {0, 0};
@@ -441,13 +459,7 @@ std::vector<Case> smooth_cases() {
 }
 
 INSTANTIATE_TEST_SUITE_P(Models, FVarAdaptiveSmooth, ::testing::ValuesIn(smooth_cases()),
-                         [](const ::testing::TestParamInfo<Case>& p) {
-                           std::string name = p.param.path.stem().string() + "_mode" +
-                                              std::to_string(p.param.mode);
-                           for (char& c : name)
-                             if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-                           return name;
-                         });
+                         case_name);
 GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(FVarAdaptiveSmooth);
 
 // Region builds (large cages are cut into batches of faces) replay the vertex table's regions'
@@ -496,18 +508,7 @@ TEST(FVarAdaptiveBuilt, SeamCagesMatchOpenSubdivsPatches) {
 // (x, y), the limit surface is the bilinear map itself (B-splines reproduce linear functions,
 // the boundary rule too), so every corner's UV must equal its vertex's position.
 TEST(FVarAdaptiveBuilt, TessellatedUvsFollowAFlatGrid) {
-  Mesh grid;
-  const int n = 4;
-  for (int y = 0; y <= n; ++y)
-    for (int x = 0; x <= n; ++x) grid.add_vertex(float(x), float(y), 0.0f);
-  for (int y = 0; y < n; ++y)
-    for (int x = 0; x < n; ++x) {
-      const uint32_t v = uint32_t((n + 1) * y + x);
-      grid.add_face({v, v + 1, v + uint32_t(n) + 2, v + uint32_t(n) + 1});
-    }
-  for (size_t v = 0; v < grid.vertex_count(); ++v)
-    grid.uvs.insert(grid.uvs.end(), {grid.positions[3 * v], grid.positions[3 * v + 1]});
-  grid.uv_indices = grid.face_vertices;
+  const Mesh grid = flat_grid();
   PatchOptions po;
   po.subdiv = subdiv_options(grid);
   po.depth = 2;
@@ -531,18 +532,7 @@ TEST(FVarAdaptiveBuilt, TessellatedUvsFollowAFlatGrid) {
 // wherever the corners are pinned (modes 1-5) every grid point's UV is its limit position's
 // (x, y), and the derivatives are the position's.
 TEST(FVarAdaptiveBuilt, GridUvsFollowAFlatGrid) {
-  Mesh grid;
-  const int cells = 4;
-  for (int y = 0; y <= cells; ++y)
-    for (int x = 0; x <= cells; ++x) grid.add_vertex(float(x), float(y), 0.0f);
-  for (int y = 0; y < cells; ++y)
-    for (int x = 0; x < cells; ++x) {
-      const uint32_t v = uint32_t((cells + 1) * y + x);
-      grid.add_face({v, v + 1, v + uint32_t(cells) + 2, v + uint32_t(cells) + 1});
-    }
-  for (size_t v = 0; v < grid.vertex_count(); ++v)
-    grid.uvs.insert(grid.uvs.end(), {grid.positions[3 * v], grid.positions[3 * v + 1]});
-  grid.uv_indices = grid.face_vertices;
+  const Mesh grid = flat_grid();
   const FaceVaryingInput in{grid.uv_indices, grid.uvs.size() / 2};
   for (int mode = 1; mode <= 5; ++mode) {
     PatchOptions po;
