@@ -289,7 +289,8 @@ bool cage_vertex_non_manifold(const Adj& adj, uint32_t v) {
 }
 
 // Level 0 sharpness: tags, then boundary, non-manifold and corner sharpening.
-void init_cage_level(const Mesh& cage, const SubdivOptions& o, const Adj& adj, RefinedLevel& L) {
+void init_cage_level(const Mesh& cage, const SubdivOptions& o, const Adj& adj, RefinedLevel& L,
+                     std::vector<uint8_t>* excluded) {
   const LevelRef lr{L, adj};
   const size_t nv = cage.vertex_count(), ne = L.edge_vertices.size() / 2;
   L.edge_sharpness.assign(ne, 0.0f);
@@ -305,6 +306,7 @@ void init_cage_level(const Mesh& cage, const SubdivOptions& o, const Adj& adj, R
   }
   L.face_hole.assign(cage.face_count(), 0);
   for (uint32_t f : cage.hole_faces) L.face_hole[f] = 1;
+  if (excluded) excluded->assign(nv, 0);
   auto count_edges = [&](uint32_t v, int& nm_edges, int& boundary) {
     for (uint32_t k = adj.veo[v]; k < adj.veo[v + 1]; ++k) {
       nm_edges += adj.edge_non_manifold[adj.ve[k]];
@@ -323,9 +325,10 @@ void init_cage_level(const Mesh& cage, const SubdivOptions& o, const Adj& adj, R
         const uint32_t e = adj.ve[k];
         exclude = adj.edge_face_count(e) == 1 && L.edge_sharpness[e] < kInf;
       }
-      if (exclude)
-        for (uint32_t i = adj.vco[v]; i < adj.vco[v + 1]; ++i)
-          L.face_hole[adj.face_of(adj.vc[i])] = 1;
+      if (!exclude) continue;
+      for (uint32_t i = adj.vco[v]; i < adj.vco[v + 1]; ++i)
+        L.face_hole[adj.face_of(adj.vc[i])] = 1;
+      if (excluded) (*excluded)[v] = 1;
     }
   }
   for (uint32_t e = 0; e < ne; ++e)
@@ -551,12 +554,13 @@ void derived_edge_sharpness(const SubdivOptions& o, const RefinedLevel& P, const
 }
 
 // The cage as level 0, with its adjacency and tags.
-Adj cage_level(const Mesh& cage, const SubdivOptions& o, RefinedLevel& L0) {
+Adj cage_level(const Mesh& cage, const SubdivOptions& o, RefinedLevel& L0,
+               std::vector<uint8_t>* excluded) {
   validate(cage, "cage");
   L0.face_offsets = cage.face_offsets;
   L0.face_vertices = cage.face_vertices;
   Adj a = build_adj(L0, cage.vertex_count());
-  init_cage_level(cage, o, a, L0);
+  init_cage_level(cage, o, a, L0, excluded);
   return a;
 }
 

@@ -118,8 +118,10 @@ struct Selection {
   }
 };
 
-/// The cage as level 0, with its adjacency and tags.
-Adj cage_level(const Mesh& cage, const SubdivOptions& o, RefinedLevel& L0);
+/// The cage as level 0, with its adjacency and tags. `excluded`, when given, gets per vertex 1
+/// where boundary interpolation "none" made the vertex's faces holes.
+Adj cage_level(const Mesh& cage, const SubdivOptions& o, RefinedLevel& L0,
+               std::vector<uint8_t>* excluded = nullptr);
 /// Sharpness in the child of parent edge e's half at its end v (Chaikin needs v's other edges;
 /// pe and ce are scratch).
 float half_sharpness_at(const SubdivOptions& o, const RefinedLevel& P, const Adj& pa, size_t e,

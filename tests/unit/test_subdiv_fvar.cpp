@@ -449,6 +449,10 @@ TEST_P(FVarAdaptiveSmooth, UvsMatchOpenSubdivsPatches) {
   for (bool inf_sharp : {false, true})
     EXPECT_EQ(check_adaptive_smooth(cage, 3, FVarInterpolation(GetParam().mode), inf_sharp), "")
         << "inf_sharp_patches " << inf_sharp;
+  // Small batches: the channel's mesh is made in blocks of 16 vertices whose seams, creases and
+  // holes cross blocks, and the tables in regions.
+  EXPECT_EQ(check_adaptive_smooth(cage, 3, FVarInterpolation(GetParam().mode), true, 16), "")
+      << "batches of 16";
 }
 
 std::vector<Case> smooth_cases() {
@@ -479,8 +483,9 @@ TEST(FVarAdaptiveBuilt, SmoothSeamCagesMatchOpenSubdivsPatches) {
   for (const Mesh& cage : {test::cube_islands(), test::torus_seams(), test::dart_grid()})
     for (int mode = 0; mode < 5; ++mode)
       for (bool inf_sharp : {false, true})
-        EXPECT_EQ(check_adaptive_smooth(cage, 4, FVarInterpolation(mode), inf_sharp), "")
-            << "mode " << mode << " inf_sharp_patches " << inf_sharp;
+        for (uint32_t batch : {0u, 8u})
+          EXPECT_EQ(check_adaptive_smooth(cage, 4, FVarInterpolation(mode), inf_sharp, batch), "")
+              << "mode " << mode << " inf_sharp_patches " << inf_sharp << " batch " << batch;
 }
 
 class FVarAdaptive : public ::testing::TestWithParam<fs::path> {};
@@ -556,6 +561,38 @@ TEST(FVarAdaptiveBuilt, GridUvsFollowAFlatGrid) {
                           double(std::fabs(uvv[2 * i + k] - pv[3 * i + k]))});
     EXPECT_LE(worst, 1e-4) << "mode " << mode;
   }
+}
+
+// FaceVaryingPatches::points takes any three components of a wider channel. Its rows are affine
+// combinations (weights summing to one), so a component that is twice another stays twice it
+// and a constant stays constant, on every point of the car's table, seams and end caps included.
+TEST(FVarAdaptiveBuilt, PointsTakeAnyComponentsOfAWideChannel) {
+  const fs::path path = fs::path(LIMN_SHARED_MODELS) / "osd/catmark_car.obj";
+  if (!fs::exists(path)) GTEST_SKIP() << "no shared models";
+  const Mesh cage = read_mesh(path);
+  const FaceVaryingInput in{cage.uv_indices, cage.uvs.size() / 2};
+  PatchOptions po;
+  po.subdiv = subdiv_options(cage);
+  po.subdiv.face_varying = FVarInterpolation::none;
+  const FaceVaryingPatches fvp = build_face_varying_patches(cage, build_patches(cage, po), in, po);
+  std::vector<float> wide;  // (u, v, 2u, 7) per value
+  for (size_t x = 0; x < in.value_count; ++x)
+    wide.insert(wide.end(), {cage.uvs[2 * x], cage.uvs[2 * x + 1], 2 * cage.uvs[2 * x], 7.0f});
+  const std::vector<float> uv = fvp.points(cage.uvs.data(), 2);
+  const std::vector<float> first = fvp.points(wide.data(), 4);
+  const std::vector<float> last = fvp.points(wide.data(), 4, 3);
+  ASSERT_EQ(uv.size(), 3 * fvp.table.point_count());
+  ASSERT_EQ(first.size(), uv.size());
+  ASSERT_EQ(last.size(), uv.size());
+  double worst = 0;
+  for (size_t i = 0; i < uv.size(); i += 3) {
+    EXPECT_EQ(uv[i + 2], 0.0f);
+    worst = std::max(
+        {worst, double(std::fabs(first[i] - uv[i])), double(std::fabs(first[i + 1] - uv[i + 1])),
+         double(std::fabs(first[i + 2] - 2 * uv[i])), double(std::fabs(last[i] - 7.0f)),
+         double(std::fabs(last[i + 1])), double(std::fabs(last[i + 2]))});
+  }
+  EXPECT_LE(worst, 1e-5);
 }
 
 // Smooth channels are tessellated through their face-varying patches: every corner's UV is

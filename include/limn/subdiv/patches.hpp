@@ -210,6 +210,12 @@ struct FaceVaryingPatches {
   FVarInterpolation interpolation = FVarInterpolation::all;
   PatchTable table;  ///< over the channel's own points: its level 0 is one point per source entry
   std::vector<uint32_t> source;  ///< per level-0 point: the channel's value index it takes
+
+  /// The table's points for components [first, first + min(3, width - first)) of the channel's
+  /// values (`width` floats per value), as 3 floats per point (missing components 0), ready
+  /// for evaluate_patches or a GPU upload. O(stencil entries). Throws InputError unless
+  /// first < width.
+  std::vector<float> points(const float* values, size_t width, size_t first = 0) const;
 };
 
 /// Builds the patches of `channel` for `table`, which build_patches or select_patches made from
