@@ -160,11 +160,7 @@ size_t limn_adaptive(const limn::Mesh& m, int depth, bool smooth) {
   if (smooth) {
     const limn::FaceVaryingInput in{m.uv_indices, m.uvs.size() / 2};
     const limn::FaceVaryingPatches f = limn::build_face_varying_patches(m, t, in, po);
-    std::vector<float> values(3 * f.source.size(), 0.0f);
-    for (size_t x = 0; x < f.source.size(); ++x)
-      values[3 * x] = m.uvs[2 * size_t(f.source[x])],
-                 values[3 * x + 1] = m.uvs[2 * size_t(f.source[x]) + 1];
-    n += f.table.patch_count() + f.table.points(values).size() / 3;
+    n += f.table.patch_count() + f.points(m.uvs.data(), 2).size() / 3;
   }
   return n;
 }

@@ -7,7 +7,6 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <map>
 #include <stdexcept>
 #include <string>
 #include <tuple>
@@ -37,6 +36,12 @@ struct PatchInfo {
   uint32_t ptex, ptex_uv;
 };
 static_assert(sizeof(PatchInfo) == 32);
+
+// The bits of PatchInfo (and UvPatch) that give a patch's shape: boundary, type, crease edge.
+uint32_t shape_bits(const PatchParam& p) {
+  return uint32_t(p.boundary & 0xF) << 8 | uint32_t(p.type) << 16 |
+         uint32_t(p.crease_edge & 3) << 18;
+}
 
 std::string with_header(int cvs, const char* a, const char* b = "", const char* c = "",
                         const char* d = "") {
@@ -358,31 +363,35 @@ void PatchDrawer::Impl::upload_uv_patches(const PatchTable& table) {
   PatchOptions po;
   po.subdiv = table.options;
   const FaceVaryingPatches fv = build_face_varying_patches(c, table, in, po);
-  std::vector<float> cage_uvs(3 * fv.source.size(), 0.0f);
-  for (size_t x = 0; x < fv.source.size(); ++x)
-    cage_uvs[3 * x] = c.uvs[2 * size_t(fv.source[x])],
-                 cage_uvs[3 * x + 1] = c.uvs[2 * size_t(fv.source[x]) + 1];
-  const std::vector<float> uv = fv.table.points(cage_uvs);
-  auto key = [](const PatchParam& p) { return std::tuple(p.ptex, p.depth, p.u, p.v); };
-  std::map<std::tuple<uint32_t, uint8_t, uint16_t, uint16_t>, UvPatch> by_place;
+  const std::vector<float> uv = fv.points(c.uvs.data(), 2);
+  // Each vertex patch's face-varying patch is the one at the same place (the two tables list
+  // their patches in different orders): matched through the face-varying places, sorted.
+  using Place = std::tuple<uint32_t, uint8_t, uint16_t, uint16_t>;
+  auto place = [](const PatchParam& p) { return Place(p.ptex, p.depth, p.u, p.v); };
   const size_t nr = fv.table.regular_params.size();
-  for (size_t i = 0; i < fv.table.patch_count(); ++i) {
-    const bool cap = i >= nr;
-    const PatchParam& p = cap ? fv.table.gregory_params[i - nr] : fv.table.regular_params[i];
-    UvPatch u{};
-    const uint32_t* pts =
-        cap ? &fv.table.gregory_points[20 * (i - nr)] : &fv.table.regular_points[16 * i];
-    for (int j = 0; j < (cap ? 20 : 16); ++j)
-      u.cv[2 * j] = uv[3 * size_t(pts[j])], u.cv[2 * j + 1] = uv[3 * size_t(pts[j]) + 1];
-    u.bits = uint32_t(p.boundary & 0xF) << 8 | uint32_t(p.type) << 16 |
-             uint32_t(p.crease_edge & 3) << 18;
-    u.sharpness = p.sharpness;
-    by_place[key(p)] = u;
-  }
+  auto param = [&](size_t i) -> const PatchParam& {
+    return i < nr ? fv.table.regular_params[i] : fv.table.gregory_params[i - nr];
+  };
+  std::vector<std::pair<Place, uint32_t>> places(fv.table.patch_count());
+  for (size_t i = 0; i < places.size(); ++i) places[i] = {place(param(i)), uint32_t(i)};
+  std::sort(places.begin(), places.end());
   std::vector<UvPatch> out;
   out.reserve(table.patch_count());
   for (const auto* params : {&table.regular_params, &table.gregory_params})
-    for (const PatchParam& p : *params) out.push_back(by_place.at(key(p)));
+    for (const PatchParam& p : *params) {
+      const auto it = std::lower_bound(places.begin(), places.end(), std::pair(place(p), 0u));
+      if (it == places.end() || it->first != place(p))
+        throw std::logic_error("render: a patch without its face-varying patch");
+      const size_t i = it->second;
+      const bool cap = i >= nr;
+      const uint32_t* pts =
+          cap ? &fv.table.gregory_points[20 * (i - nr)] : &fv.table.regular_points[16 * i];
+      UvPatch& u = out.emplace_back();
+      for (int j = 0; j < (cap ? 20 : 16); ++j)
+        u.cv[2 * j] = uv[3 * size_t(pts[j])], u.cv[2 * j + 1] = uv[3 * size_t(pts[j]) + 1];
+      u.bits = shape_bits(param(i));
+      u.sharpness = param(i).sharpness;
+    }
   gl::upload(uv_patches, uv_patches_cap, out.data(), out.size() * sizeof(UvPatch));
 }
 
@@ -415,9 +424,8 @@ void PatchDrawer::upload_patches(const PatchTable& table) {
         if (pp.v == 0) in.keys[0] = edge_of(pp.corner);
         if (pp.u == 0) in.keys[3] = edge_of(pp.corner + n - 1);
       }
-      in.bits = uint32_t(pp.level) | uint32_t(pp.boundary & 0xF) << 8 |
-                uint32_t(pp.transition & 0xF) << 12 | uint32_t(pp.type) << 16 |
-                uint32_t(pp.crease_edge & 3) << 18 | uint32_t(pp.depth & 31) << 20;
+      in.bits = uint32_t(pp.level) | uint32_t(pp.transition & 0xF) << 12 | shape_bits(pp) |
+                uint32_t(pp.depth & 31) << 20;
       in.sharpness = pp.sharpness;
       in.ptex = pp.ptex;
       in.ptex_uv = uint32_t(pp.u) | uint32_t(pp.v) << 16;
