@@ -339,6 +339,10 @@ struct MemoryBuffer : std::streambuf {
 
 }  // namespace
 
+// Below this size both reads take a few milliseconds: starting TBB's threads for them would
+// cost more than the second core saves (~25 ms on the reference machine, at a process's start).
+constexpr size_t kParallelBytes = size_t(4) << 20;
+
 Mesh read_obj(std::string_view data, std::string_view name) {
   if (data.size() >= 3 && std::memcmp(data.data(), "\xEF\xBB\xBF", 3) == 0) data.remove_prefix(3);
   if (std::memchr(data.data(), '\0', data.size()) != nullptr)
@@ -358,10 +362,13 @@ Mesh read_obj(std::string_view data, std::string_view name) {
                               /*triangulate=*/false, /*default_vcols_fallback=*/false);
   };
   auto scan_all = [&] { scan = ObjScanner(data, name, mesh).run(); };
-  if (tag_lines_plausible(data)) {
+  if (tag_lines_plausible(data) && data.size() >= kParallelBytes) {
     // The strict scan and tinyobjloader's parse read the same bytes independently: run them
     // side by side, so validation costs a second core rather than wall time.
     tbb::parallel_invoke(scan_all, parse);
+  } else if (tag_lines_plausible(data)) {
+    scan_all();
+    parse();
   } else {
     scan_all();  // throws with the offending line; tinyobjloader never sees the data
   }

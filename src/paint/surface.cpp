@@ -114,26 +114,26 @@ PaintSurface::PaintSurface(const Mesh& mesh) : impl_(std::make_unique<Impl>()) {
     back_[t] = back;
   }
 
-  impl_->device = rtcNewDevice(nullptr);
+  impl_->device = embree().rtcNewDevice(nullptr);
   if (!impl_->device) throw std::runtime_error("Embree: cannot create a device");
   impl_->ray16 =
-      rtcGetDeviceProperty(impl_->device, RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED) != 0;
-  impl_->scene = rtcNewScene(impl_->device);
-  rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
+      embree().rtcGetDeviceProperty(impl_->device, RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED) != 0;
+  impl_->scene = embree().rtcNewScene(impl_->device);
+  embree().rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
   // Watertight: a ray through a shared vertex or edge must not slip between the triangles (a
   // missed occluder would paint through it, a missed pick would drop a dab).
-  rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST);
-  RTCGeometry g = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-  float* vb = static_cast<float*>(rtcSetNewGeometryBuffer(
+  embree().rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST);
+  RTCGeometry g = embree().rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  float* vb = static_cast<float*>(embree().rtcSetNewGeometryBuffer(
       g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.vertex_count()));
   std::copy(mesh.positions.begin(), mesh.positions.end(), vb);
-  unsigned* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+  unsigned* ib = static_cast<unsigned*>(embree().rtcSetNewGeometryBuffer(
       g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), nt));
   std::copy(tris.begin(), tris.end(), ib);
-  rtcCommitGeometry(g);
-  rtcAttachGeometry(impl_->scene, g);
-  rtcReleaseGeometry(g);
-  rtcCommitScene(impl_->scene);
+  embree().rtcCommitGeometry(g);
+  embree().rtcAttachGeometry(impl_->scene, g);
+  embree().rtcReleaseGeometry(g);
+  embree().rtcCommitScene(impl_->scene);
 }
 
 PaintSurface::~PaintSurface() = default;
@@ -228,7 +228,7 @@ bool PaintSurface::closest_point(const float p[3], float max_dist, SurfaceHit& h
   pq.radius = q.best;
   RTCPointQueryContext ctx;
   rtcInitPointQueryContext(&ctx);
-  rtcPointQuery(impl_->scene, &pq, &ctx, &closest_callback, &q);
+  embree().rtcPointQuery(impl_->scene, &pq, &ctx, &closest_callback, &q);
   if (q.tri == UINT32_MAX || q.best > max_dist) return false;
   hit.p[0] = q.q.x, hit.p[1] = q.q.y, hit.p[2] = q.q.z;
   std::copy_n(normal(q.tri), 3, hit.n);
@@ -248,7 +248,7 @@ bool PaintSurface::intersect(const float org[3], const float dir[3], float tnear
   rh.ray.time = 0, rh.ray.mask = 0xffffffffu, rh.ray.id = 0, rh.ray.flags = 0;
   rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-  rtcIntersect1(impl_->scene, &ctx, &rh);
+  embree().rtcIntersect1(impl_->scene, &ctx, &rh);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
   hit.distance = rh.ray.tfar;
   for (int k = 0; k < 3; ++k) hit.p[k] = org[k] + rh.ray.tfar * dir[k];
@@ -265,7 +265,7 @@ bool PaintSurface::occluded(const float org[3], const float dir[3], float tnear,
   r.dir_x = dir[0], r.dir_y = dir[1], r.dir_z = dir[2];
   r.tnear = tnear, r.tfar = tfar;
   r.time = 0, r.mask = 0xffffffffu, r.id = 0, r.flags = 0;
-  rtcOccluded1(impl_->scene, &ctx, &r);
+  embree().rtcOccluded1(impl_->scene, &ctx, &r);
   return r.tfar == -INFINITY;
 }
 
@@ -303,11 +303,11 @@ void PaintSurface::occluded_many(size_t count, const float* org, const float* di
   if (impl_->ray16)
     occluded_packets<16, RTCRay16>(
         count, org, dir, tnear, tfar, occluded,
-        [&](const int* valid, RTCRay16* r) { rtcOccluded16(valid, scene, &ctx, r); });
+        [&](const int* valid, RTCRay16* r) { embree().rtcOccluded16(valid, scene, &ctx, r); });
   else
     occluded_packets<8, RTCRay8>(
         count, org, dir, tnear, tfar, occluded,
-        [&](const int* valid, RTCRay8* r) { rtcOccluded8(valid, scene, &ctx, r); });
+        [&](const int* valid, RTCRay8* r) { embree().rtcOccluded8(valid, scene, &ctx, r); });
 }
 
 void PaintSurface::triangles_near(const float c[3], float r, std::vector<uint32_t>& out) const {
@@ -319,7 +319,7 @@ void PaintSurface::triangles_near(const float c[3], float r, std::vector<uint32_
   pq.radius = r;
   RTCPointQueryContext ctx;
   rtcInitPointQueryContext(&ctx);
-  rtcPointQuery(impl_->scene, &pq, &ctx, &gather_callback, &q);
+  embree().rtcPointQuery(impl_->scene, &pq, &ctx, &gather_callback, &q);
   auto it = std::remove_if(out.begin() + std::ptrdiff_t(first), out.end(),
                            [&](uint32_t t) { return degenerate(t); });
   out.erase(it, out.end());
@@ -336,7 +336,7 @@ void ask_box(RTCScene scene, BoxQuery& q, RTCPointQueryFunction callback) {
   pq.radius = (q.h + q.slack) * 1.7320508f * 1.0001f;  // the ball around the grown box
   RTCPointQueryContext ctx;
   rtcInitPointQueryContext(&ctx);
-  rtcPointQuery(scene, &pq, &ctx, callback, &q);
+  embree().rtcPointQuery(scene, &pq, &ctx, callback, &q);
 }
 
 }  // namespace

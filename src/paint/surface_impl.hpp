@@ -2,7 +2,7 @@
 // surface once and keeps with it. Internal header.
 #pragma once
 
-#include <embree3/rtcore.h>
+#include "core/embree.hpp"
 
 #include <memory>
 #include <mutex>
@@ -21,8 +21,8 @@ struct PaintSurface::Impl {
   mutable std::shared_ptr<const void> derived;
 
   ~Impl() {
-    if (scene) rtcReleaseScene(scene);
-    if (device) rtcReleaseDevice(device);
+    if (scene) embree().rtcReleaseScene(scene);
+    if (device) embree().rtcReleaseDevice(device);
   }
 };
 

@@ -1,9 +1,9 @@
 // Surface-to-surface distances through Embree point queries.
 #include "limn/simplify/distance.hpp"
 
-#include <embree3/rtcore.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
+#include "core/embree.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -29,24 +29,24 @@ class ClosestPoint {
       const auto v = m.face(f);
       for (size_t i = 1; i + 1 < v.size(); ++i) tris_.insert(tris_.end(), {v[0], v[i], v[i + 1]});
     }
-    device_ = rtcNewDevice(nullptr);
+    device_ = embree().rtcNewDevice(nullptr);
     if (!device_) throw std::runtime_error("Embree: cannot create a device");
-    scene_ = rtcNewScene(device_);
-    RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
-    float* vb = static_cast<float*>(rtcSetNewGeometryBuffer(
+    scene_ = embree().rtcNewScene(device_);
+    RTCGeometry g = embree().rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+    float* vb = static_cast<float*>(embree().rtcSetNewGeometryBuffer(
         g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), m.vertex_count()));
     std::copy(m.positions.begin(), m.positions.end(), vb);
-    unsigned* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+    unsigned* ib = static_cast<unsigned*>(embree().rtcSetNewGeometryBuffer(
         g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), tris_.size() / 3));
     std::copy(tris_.begin(), tris_.end(), ib);
-    rtcCommitGeometry(g);
-    rtcAttachGeometry(scene_, g);
-    rtcReleaseGeometry(g);
-    rtcCommitScene(scene_);
+    embree().rtcCommitGeometry(g);
+    embree().rtcAttachGeometry(scene_, g);
+    embree().rtcReleaseGeometry(g);
+    embree().rtcCommitScene(scene_);
   }
   ~ClosestPoint() {
-    rtcReleaseScene(scene_);
-    rtcReleaseDevice(device_);
+    embree().rtcReleaseScene(scene_);
+    embree().rtcReleaseDevice(device_);
   }
   ClosestPoint(const ClosestPoint&) = delete;
   ClosestPoint& operator=(const ClosestPoint&) = delete;
@@ -60,7 +60,7 @@ class ClosestPoint {
     pq.radius = std::numeric_limits<float>::infinity();
     RTCPointQueryContext ctx;
     rtcInitPointQueryContext(&ctx);
-    rtcPointQuery(scene_, &pq, &ctx, &ClosestPoint::callback, &q);
+    embree().rtcPointQuery(scene_, &pq, &ctx, &ClosestPoint::callback, &q);
     return q.best;
   }
 

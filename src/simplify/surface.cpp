@@ -2,11 +2,12 @@
 #include "limn/simplify/surface.hpp"
 
 #include <fmt/format.h>
-#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+
+#include "core/parallel.hpp"
 
 namespace limn {
 
@@ -57,32 +58,30 @@ VsaSurface prepare_surface(const Mesh& mesh, std::string_view name) {
   s.area.resize(nf);
   s.vec.resize(3 * nf);
   const float* P = mesh.positions.data();
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, nf, 1 << 14),
-                    [&](const tbb::blocked_range<size_t>& r) {
-                      for (size_t f = r.begin(); f < r.end(); ++f) {
-                        // Newell's method in double, relative to the first corner.
-                        const auto v = mesh.face(f);
-                        const float* o = P + 3 * size_t(v[0]);
-                        double n[3] = {0, 0, 0};
-                        for (size_t i = 1; i + 1 < v.size(); ++i) {
-                          const float* a = P + 3 * size_t(v[i]);
-                          const float* b = P + 3 * size_t(v[i + 1]);
-                          const double ax = double(a[0]) - o[0], ay = double(a[1]) - o[1],
-                                       az = double(a[2]) - o[2];
-                          const double bx = double(b[0]) - o[0], by = double(b[1]) - o[1],
-                                       bz = double(b[2]) - o[2];
-                          n[0] += ay * bz - az * by;
-                          n[1] += az * bx - ax * bz;
-                          n[2] += ax * by - ay * bx;
-                        }
-                        double len = 0;
-                        for (int k = 0; k < 3; ++k) {
-                          s.vec[3 * f + k] = 0.5 * n[k];
-                          len += 0.25 * n[k] * n[k];
-                        }
-                        s.area[f] = std::sqrt(len);
-                      }
-                    });
+  // parallel_range: a small mesh's faces in one go, without starting TBB's threads for them.
+  parallel_range(nf, size_t(1) << 14, [&](size_t fb, size_t fe) {
+    for (size_t f = fb; f < fe; ++f) {
+      // Newell's method in double, relative to the first corner.
+      const auto v = mesh.face(f);
+      const float* o = P + 3 * size_t(v[0]);
+      double n[3] = {0, 0, 0};
+      for (size_t i = 1; i + 1 < v.size(); ++i) {
+        const float* a = P + 3 * size_t(v[i]);
+        const float* b = P + 3 * size_t(v[i + 1]);
+        const double ax = double(a[0]) - o[0], ay = double(a[1]) - o[1], az = double(a[2]) - o[2];
+        const double bx = double(b[0]) - o[0], by = double(b[1]) - o[1], bz = double(b[2]) - o[2];
+        n[0] += ay * bz - az * by;
+        n[1] += az * bx - ax * bz;
+        n[2] += ax * by - ay * bx;
+      }
+      double len = 0;
+      for (int k = 0; k < 3; ++k) {
+        s.vec[3 * f + k] = 0.5 * n[k];
+        len += 0.25 * n[k] * n[k];
+      }
+      s.area[f] = std::sqrt(len);
+    }
+  });
   s.total_area = std::accumulate(s.area.begin(), s.area.end(), 0.0);
   s.bbox = bounding_box(mesh);
 
