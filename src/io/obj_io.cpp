@@ -247,7 +247,11 @@ class ObjScanner {
       mesh_.tags.crease_method =
           strings_[0] == "chaikin" ? CreaseMethod::chaikin : CreaseMethod::uniform;
     } else if (name == "smoothtriangles") {
-      mesh_.tags.smooth_triangles = strings_.size() == 1 && strings_[0] == "catmark";
+      // As OpenSubdiv's shape files read it: the value names the triangle rule, "catmark"
+      // (Sdc TRI_SUB_CATMARK, the default) or "smooth" (TRI_SUB_SMOOTH).
+      if (strings_.size() != 1 || (strings_[0] != "catmark" && strings_[0] != "smooth"))
+        fail("smoothtriangles tag needs 'catmark' or 'smooth'");
+      mesh_.tags.smooth_triangles = strings_[0] == "smooth";
     }
     // Other tags are OpenSubdiv extensions limn does not use; they are skipped.
   }
@@ -481,7 +485,7 @@ void write_obj(const Mesh& m, std::string& out) {
   if (m.tags.crease_method != CreaseMethod::unset)
     out += fmt::format("t creasemethod 0/0/1 {}\n",
                        m.tags.crease_method == CreaseMethod::chaikin ? "chaikin" : "normal");
-  if (m.tags.smooth_triangles) out += "t smoothtriangles 0/0/1 catmark\n";
+  if (m.tags.smooth_triangles) out += "t smoothtriangles 0/0/1 smooth\n";
 }
 
 }  // namespace limn

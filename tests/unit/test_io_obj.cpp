@@ -76,7 +76,7 @@ TEST(Obj, OpenSubdivTags) {
                               "t interpolateboundary 1/0/0 1\n"
                               "t creasemethod 0/0/1 chaikin\n"
                               "t facevaryinginterpolateboundary 1/0/0 1\n"
-                              "t smoothtriangles 0/0/1 catmark\n",
+                              "t smoothtriangles 0/0/1 smooth\n",
                           "t.obj");
   EXPECT_EQ(m.crease_edges, (std::vector<uint32_t>{0, 1, 1, 2, 2, 3}));
   EXPECT_EQ(m.crease_sharpness, (std::vector<float>{2.5f, 1.0f, 10.0f}));
@@ -87,6 +87,23 @@ TEST(Obj, OpenSubdivTags) {
   EXPECT_EQ(m.tags.crease_method, CreaseMethod::chaikin);
   EXPECT_EQ(m.tags.fvar_boundary, 1);
   EXPECT_TRUE(m.tags.smooth_triangles);
+}
+
+// OpenSubdiv's shape files name the triangle rule: "catmark" is TRI_SUB_CATMARK (its default),
+// "smooth" TRI_SUB_SMOOTH (regression/common/shape_utils.cpp); anything else is refused.
+TEST(Obj, SmoothTrianglesTagNamesTheRule) {
+  const std::string base = std::string(kQuadAndTri) + "t smoothtriangles 0/0/1 ";
+  EXPECT_FALSE(read_obj(base + "catmark\n", "t.obj").tags.smooth_triangles);
+  EXPECT_TRUE(read_obj(base + "smooth\n", "t.obj").tags.smooth_triangles);
+  EXPECT_FALSE(read_obj(std::string(kQuadAndTri), "t.obj").tags.smooth_triangles);
+  EXPECT_THROW(read_obj(base + "loop\n", "t.obj"), InputError);
+  Mesh m = read_obj(base + "smooth\n", "t.obj");
+  for (bool smooth : {true, false}) {
+    m.tags.smooth_triangles = smooth;
+    std::string text;
+    write_obj(m, text);
+    EXPECT_EQ(read_obj(text, "again.obj").tags.smooth_triangles, smooth);
+  }
 }
 
 TEST(Obj, TagsAfterAnEmptyGroupAreKept) {

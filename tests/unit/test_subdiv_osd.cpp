@@ -14,6 +14,8 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <map>
 #include <ostream>
 #include <string>
@@ -472,6 +474,36 @@ TEST(OsdConformance, SharedModelsPresent) {
   ASSERT_TRUE(fs::is_directory(fs::path(LIMN_SHARED_MODELS) / "osd"))
       << "missing " << LIMN_SHARED_MODELS << "/osd (clone the shared folder beside the repo)";
   EXPECT_GE(osd_models().size(), 20u) << "expected the OpenSubdiv models in " << LIMN_SHARED_MODELS;
+}
+
+// The triangle rule comes from the tag as OpenSubdiv's shape files are read (regression/common/
+// shape_utils.cpp: "catmark" is TRI_SUB_CATMARK, "smooth" TRI_SUB_SMOOTH), not from limn's own
+// reading: catmark_smoothtris0 says "catmark", and the same cage is tried with "smooth". The two
+// rules give different surfaces there (checked on OpenSubdiv's side), so a reading that swapped
+// them would pass neither case.
+TEST(OsdConformance, SmoothTrianglesTagReadAsOpenSubdivReadsIt) {
+  const fs::path path = fs::path(LIMN_SHARED_MODELS) / "osd" / "catmark_smoothtris0.obj";
+  if (!fs::exists(path)) GTEST_SKIP() << "no shared models";
+  std::ifstream in(path);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string tag = "t smoothtriangles 0/0/1 catmark";
+  const size_t at = text.find(tag);
+  ASSERT_NE(at, std::string::npos);
+  std::vector<double> level2[2];
+  for (const bool smooth : {false, true}) {
+    std::string tagged = text;
+    tagged.replace(at, tag.size(), smooth ? "t smoothtriangles 0/0/1 smooth" : tag);
+    const Mesh cage = read_obj(tagged, path.string());
+    SubdivOptions osd_reading = subdiv_options(cage);
+    osd_reading.smooth_triangles = smooth;  // what shape_utils makes of the tag
+    EXPECT_EQ(subdiv_options(cage).smooth_triangles, smooth);
+    expect_matches_osd(cage, 2, osd_reading);
+    level2[smooth] = test::osd_refine(cage, 2, osd_reading).levels[2].positions;
+  }
+  double differ = 0;
+  for (size_t i = 0; i < level2[0].size(); ++i)
+    differ = std::max(differ, std::fabs(level2[0][i] - level2[1][i]));
+  EXPECT_GT(differ, 1e-3) << "the two rules give the same surface: the test could not fail";
 }
 
 class OsdModel : public ::testing::TestWithParam<ModelCase> {};

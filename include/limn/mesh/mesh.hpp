@@ -40,7 +40,7 @@ struct SubdivTags {
   BoundaryInterpolation boundary = BoundaryInterpolation::unset;
   int8_t fvar_boundary = -1;  ///< `t facevaryinginterpolateboundary` value, -1 when absent.
   CreaseMethod crease_method = CreaseMethod::unset;
-  bool smooth_triangles = false;  ///< `t smoothtriangles ... catmark` (OpenSubdiv TRI_SUB_SMOOTH).
+  bool smooth_triangles = false;  ///< `t smoothtriangles 0/0/1 smooth` (OpenSubdiv TRI_SUB_SMOOTH).
 };
 
 /// Sharpness at or above this value is infinitely sharp (OpenSubdiv's SHARPNESS_INFINITE).
