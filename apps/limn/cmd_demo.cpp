@@ -48,13 +48,13 @@ Camera look(const float target[3], const double dir[3], double distance) {
   return c;
 }
 
-// The whole cage from above one side, `zoom` times the distance that frames it.
-Camera overview(const Mesh& cage, float zoom) {
+// The whole cage from above one side, filling the picture.
+Camera overview(const Mesh& cage) {
   const Box b = bounding_box(cage);
   const float centre[3] = {(b.min[0] + b.max[0]) / 2, (b.min[1] + b.max[1]) / 2,
                            (b.min[2] + b.max[2]) / 2};
   const double dir[3] = {0.8, -1.5, 1.1};
-  return look(centre, dir, zoom * 0.62 * b.diagonal() / std::tan(20.0 * 3.14159265358979 / 180));
+  return fit_camera(look(centre, dir, b.diagonal()), cage.positions);
 }
 
 void save_image(RenderTarget& target, const std::filesystem::path& path) {
@@ -127,8 +127,8 @@ void workflow_surface(const std::filesystem::path& dir, std::string& md, nlohman
       if (valence[v] > most) most = valence[v], star = v;
   }
   const double star_dir[3] = {vn[3 * star] + 0.3, vn[3 * star + 1] - 0.4, vn[3 * star + 2] + 0.3};
-  const Camera cameras[2] = {overview(cage, 1.0f), look(&cage.positions[3 * size_t(star)], star_dir,
-                                                        0.12 * bounding_box(cage).diagonal())};
+  const Camera cameras[2] = {overview(cage), look(&cage.positions[3 * size_t(star)], star_dir,
+                                                  0.12 * bounding_box(cage).diagonal())};
   for (int ci = 0; ci < 2; ++ci) {
     const char* name = ci ? "near" : "far";
     const Camera& cam = cameras[ci];
@@ -231,7 +231,7 @@ Mesh workflow_paint(const std::filesystem::path& dir, std::string& md, nlohmann:
     DrawOptions o;
     o.texture = &gpu_texture;
     target->begin(kWhite);
-    drawer.draw(overview(cage, 1.0f), o);
+    drawer.draw(overview(cage), o);
     save_image(*target, dir / "painted.png");
     md += "![painted](painted.png)\n\n";
   }
@@ -263,7 +263,7 @@ void workflow_simplify(const std::filesystem::path& dir, std::string& md, nlohma
       "{:.0f} ms.\n\n",
       dense.face_count(), r.stats.clusters, r.stats.energy, r.output.mesh.face_count(), t_simplify);
   if (gl) {
-    const Camera cam = overview(cage, 1.0f);
+    const Camera cam = overview(cage);
     MeshDrawer partition(dense, cluster_colors(r.labels));
     target->begin(kWhite);
     partition.draw(cam, DrawOptions{});
@@ -306,7 +306,7 @@ void workflow(const std::filesystem::path& dir, std::string& md, nlohmann::json&
   std::unique_ptr<RenderTarget> target;  // made by the first step, once timed
   PatchOptions po;
   po.subdiv = subdiv_options(cage);
-  po.depth = 8;
+  po.depth = 10;
   workflow_surface(dir, md, j, sw, gl.get(), target, cage, po);
   const Mesh dense = workflow_paint(dir, md, j, sw, gl.get(), target.get(), cage, po);
   workflow_simplify(dir, md, j, sw, gl.get(), target.get(), cage, dense);

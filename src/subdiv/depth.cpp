@@ -132,6 +132,82 @@ Camera frame_camera(const Mesh& mesh, int width, int height) {
   return c;
 }
 
+Camera fit_camera(const Camera& view, std::span<const float> points, double margin) {
+  const size_t n = points.size() / 3;
+  if (n == 0 || !(margin >= 0 && margin <= 0.45)) return view;
+  // The view's frame: forward f, right r, up u (orthonormal).
+  double f[3], u[3], r[3];
+  for (int k = 0; k < 3; ++k) f[k] = double(view.target[k]) - view.eye[k], u[k] = view.up[k];
+  auto dot3 = [](const double* a, const double* b) {
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+  };
+  auto unit = [&](double* a) {
+    const double l = std::sqrt(dot3(a, a));
+    if (!(l > 0)) return false;
+    for (int k = 0; k < 3; ++k) a[k] /= l;
+    return true;
+  };
+  if (!unit(f)) return view;
+  r[0] = f[1] * u[2] - f[2] * u[1], r[1] = f[2] * u[0] - f[0] * u[2],
+  r[2] = f[0] * u[1] - f[1] * u[0];
+  if (!unit(r)) return view;
+  u[0] = r[1] * f[2] - r[2] * f[1], u[1] = r[2] * f[0] - r[0] * f[2],
+  u[2] = r[0] * f[1] - r[1] * f[0];
+  // The image's half extents as tangents, less the margin.
+  const double ty = std::tan(0.5 * double(view.fovy_deg) * std::numbers::pi / 180.0);
+  const double tx = ty * double(view.width) / std::max(view.height, 1);
+  const double hx = tx * (1 - 2 * margin), hy = ty * (1 - 2 * margin);
+  // A point at (a, b, d) in the frame (about the old eye), seen from an eye moved to
+  // s_r r + s_u u - t f, fits when |a - s_r| <= hx (d + t) and |b - s_u| <= hy (d + t). Over all
+  // points: max(a - hx d) - hx t <= s_r <= min(a + hx d) + hx t, which has room once
+  // t >= (max(a - hx d) - min(a + hx d)) / (2 hx); the same in b. The nearest such eye frames
+  // the points.
+  double amax = -HUGE_VAL, amin = HUGE_VAL, bmax = -HUGE_VAL, bmin = HUGE_VAL;
+  double dmin = HUGE_VAL, dmax = -HUGE_VAL;
+  for (size_t i = 0; i < n; ++i) {
+    const double p[3] = {double(points[3 * i]) - view.eye[0],
+                         double(points[3 * i + 1]) - view.eye[1],
+                         double(points[3 * i + 2]) - view.eye[2]};
+    const double a = dot3(p, r), b = dot3(p, u), d = dot3(p, f);
+    amax = std::max(amax, a - hx * d), amin = std::min(amin, a + hx * d);
+    bmax = std::max(bmax, b - hy * d), bmin = std::min(bmin, b + hy * d);
+    dmin = std::min(dmin, d), dmax = std::max(dmax, d);
+  }
+  if (!std::isfinite(amax + amin + bmax + bmin + dmin + dmax)) return view;
+  double t = std::max((amax - amin) / (2 * hx), (bmax - bmin) / (2 * hy));
+  // Every point in front of the eye, by a little of the depth range at least.
+  t = std::max(t, -dmin + 1e-3 * std::max(dmax - dmin, 1e-9));
+  // The shifts centre the points' extent: the middle of each feasible interval.
+  // Each shift centres the points' image on its axis: the largest and the smallest of
+  // (a - s) / (d + t) opposite (found by bisection: their sum falls as s grows). On the axis
+  // that fixed t the interval is a single shift.
+  auto centre = [&](const double* axis, double lo, double hi) {
+    for (int it = 0; it < 60 && hi - lo > 1e-12 * (std::abs(lo) + std::abs(hi) + 1); ++it) {
+      const double s = 0.5 * (lo + hi);
+      double most = -HUGE_VAL, least = HUGE_VAL;
+      for (size_t i = 0; i < n; ++i) {
+        const double p[3] = {double(points[3 * i]) - view.eye[0],
+                             double(points[3 * i + 1]) - view.eye[1],
+                             double(points[3 * i + 2]) - view.eye[2]};
+        const double x = (dot3(p, axis) - s) / (dot3(p, f) + t);
+        most = std::max(most, x), least = std::min(least, x);
+      }
+      (most + least > 0 ? lo : hi) = s;
+    }
+    return 0.5 * (lo + hi);
+  };
+  const double sr = centre(r, amax - hx * t, amin + hx * t);
+  const double su = centre(u, bmax - hy * t, bmin + hy * t);
+  const double centre_depth = 0.5 * (dmin + dmax) + t;
+  Camera c = view;
+  for (int k = 0; k < 3; ++k) {
+    const double eye = view.eye[k] + sr * r[k] + su * u[k] - t * f[k];
+    c.eye[k] = float(eye);
+    c.target[k] = float(eye + centre_depth * f[k]);
+  }
+  return c;
+}
+
 VertexErrorModel vertex_error_model(const Mesh& cage, const SubdivOptions& options) {
   (void)options;
   const size_t nv = cage.vertex_count();

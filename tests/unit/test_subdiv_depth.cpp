@@ -3,7 +3,10 @@
 // which shares no code with the patches) for several cameras.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <utility>
+#include <vector>
 
 #include "deep_reference.hpp"
 #include "limn/mesh/shapes.hpp"
@@ -12,6 +15,62 @@
 
 namespace limn {
 namespace {
+
+// fit_camera: every point inside the image with the margin free, the extent touching the margin
+// on both sides of one axis (the tight one) and centred on the other, the direction kept. Shapes
+// of different proportions (a flat torus, a tall box, scattered points), seen from an oblique and
+// a side view, in a wide and a tall image.
+TEST(Depth, FitCameraFillsThePictureWithAnyShape) {
+  Mesh tall = make_cube();
+  for (size_t v = 0; v < tall.vertex_count(); ++v) tall.positions[3 * v + 2] *= 6.0f;
+  std::vector<float> scattered;
+  uint64_t x = 7;
+  for (int i = 0; i < 300; ++i) {
+    x = x * 6364136223846793005ULL + 1442695040888963407ULL;
+    scattered.push_back(float((x >> 33) % 1000) / 100.0f - 3.0f);
+  }
+  const std::vector<std::vector<float>> shapes = {make_shape("torus").positions, tall.positions,
+                                                  scattered};
+  for (const auto& pts : shapes)
+    for (const auto& [w, h] : {std::pair{960, 600}, std::pair{400, 900}})
+      for (const float dir : {0.3f, 2.0f}) {
+        Camera view;
+        view.width = w, view.height = h;
+        view.target[0] = view.target[1] = view.target[2] = 1.0f;
+        view.eye[0] = 40.0f, view.eye[1] = -25.0f * dir, view.eye[2] = 12.0f;
+        view.up[0] = 0, view.up[1] = 0, view.up[2] = 1;
+        const double margin = 0.05;
+        const Camera c = fit_camera(view, pts, margin);
+        double lo[2] = {1e30, 1e30}, hi[2] = {-1e30, -1e30};
+        for (size_t i = 0; i < pts.size() / 3; ++i) {
+          double px, py;
+          ASSERT_TRUE(c.project(&pts[3 * i], px, py));
+          lo[0] = std::min(lo[0], px), hi[0] = std::max(hi[0], px);
+          lo[1] = std::min(lo[1], py), hi[1] = std::max(hi[1], py);
+        }
+        const double size[2] = {double(w), double(h)};
+        int tight = -1;
+        for (int k = 0; k < 2; ++k) {
+          const double m = margin * size[k];
+          EXPECT_GE(lo[k], m - 1e-3 * size[k]) << k;
+          EXPECT_LE(hi[k], size[k] - m + 1e-3 * size[k]) << k;
+          // Centred: as much room on both sides.
+          EXPECT_NEAR(lo[k], size[k] - hi[k], 0.02 * size[k]) << k;
+          if (std::abs(lo[k] - m) < 1e-3 * size[k]) tight = k;
+        }
+        EXPECT_GE(tight, 0) << "the points touch no margin: not as large as they could be";
+        // The view direction is kept.
+        double a[3], b[3], la = 0, lb = 0, ab = 0;
+        for (int k = 0; k < 3; ++k) {
+          a[k] = double(view.target[k]) - view.eye[k], b[k] = double(c.target[k]) - c.eye[k];
+          la += a[k] * a[k], lb += b[k] * b[k], ab += a[k] * b[k];
+        }
+        EXPECT_NEAR(ab / std::sqrt(la * lb), 1.0, 1e-6);
+      }
+  // Nothing to frame: the view as it was.
+  const Camera same = fit_camera(Camera{}, {});
+  EXPECT_EQ(same.eye[2], Camera{}.eye[2]);
+}
 
 TEST(Depth, EigenvaluesMatchTheDesignTable) {
   // ../shared/design/subdivision.md, from the closed form; valence 4 is the bicubic 1/2, 1/4.

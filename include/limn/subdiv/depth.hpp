@@ -88,6 +88,14 @@ class CameraView {
 /// box in a width x height image.
 Camera frame_camera(const Mesh& mesh, int width, int height);
 
+/// `view` moved along its view axis and sideways (its direction, up, field of view and image
+/// kept) so that every point (3 floats each) projects inside the image with `margin` (a
+/// fraction of the image's width and height) free on each side, the points' extent spanning
+/// the image on one axis and centred on the other: a shape fills the picture, whatever its
+/// proportions. The target moves to the view axis at the middle of the points' depth range.
+/// Returns `view` unchanged for no points or a margin outside [0, 0.45]. O(points).
+Camera fit_camera(const Camera& view, std::span<const float> points, double margin = 0.04);
+
 /// The subdominant (lambda) and sub-subdominant (mu) eigenvalues of the Catmull-Clark
 /// subdivision matrix of a smooth interior vertex of valence n >= 3.
 void catmark_eigenvalues(int valence, double& lambda, double& mu);
