@@ -48,6 +48,11 @@ class Viewer {
   void set_mode(Mode m);
   void screenshot(const std::filesystem::path& path);
   void report(const std::exception& e);
+  // The 3D view's part of the window: right of the panel while it shows (so the panel hides
+  // none of the model), the whole window without it. Re-frames a framed view whose area changed.
+  void update_view_area();
+  void frame_view();  // frames the cage in the view area
+  int view_w() const { return std::max(fb_w_ - view_x_, 1); }
   // Runs f; interactively an error becomes the status line (the session goes on), in a script
   // it ends the run.
   template <class F>
@@ -68,7 +73,11 @@ class Viewer {
   bool imgui_ = false;
   OrbitCamera orbit_;
   int fb_w_ = 1, fb_h_ = 1;
-  double px_scale_ = 1;  // framebuffer pixels per window coordinate
+  double px_scale_ = 1;     // framebuffer pixels per window coordinate
+  int view_x_ = 0;          // framebuffer pixels left of the 3D view (the panel's)
+  double panel_right_ = 0;  // the panel's right edge, framebuffer pixels (last drawn)
+  bool framed_ = true;      // the view is as frame_view left it (no orbit, pan or zoom since)
+  int framed_w_ = 0, framed_h_ = 0;
 
   Mode mode_ = Mode::view;
   Display display_ = Display::surface;
@@ -139,7 +148,7 @@ Viewer::Viewer(Scene& scene, const ViewerOptions& o) : scene_(scene), o_(o), ui_
   keep_gl_libraries_loaded();
 
   glfwGetFramebufferSize(window_, &fb_w_, &fb_h_);
-  orbit_.frame(scene.cage(), std::max(fb_w_, 1), std::max(fb_h_, 1));
+  frame_view();  // in the whole window until the panel has a size
   display_ = scene.is_cage() ? Display::surface : Display::cage;
   max_depth_edit_ = surface_.max_depth, depth_edit_ = surface_.depth;
   brush_.radius = 16.0f;
@@ -181,16 +190,16 @@ void Viewer::apply(const Action& a) {
   using K = Action::Kind;
   switch (a.kind) {
     case K::orbit:
-      orbit_.orbit(a.x, a.y);
+      orbit_.orbit(a.x, a.y), framed_ = false;
       break;
     case K::pan:
-      orbit_.pan(a.x, a.y);
+      orbit_.pan(a.x, a.y), framed_ = false;
       break;
     case K::zoom:
-      orbit_.zoom(a.x);
+      orbit_.zoom(a.x), framed_ = false;
       break;
     case K::frame:
-      orbit_.frame(scene_.cage(), fb_w_, fb_h_);
+      frame_view();
       break;
     case K::mode:
       set_mode(a.mode);
@@ -221,9 +230,10 @@ void Viewer::apply(const Action& a) {
       ui_ = a.flag;
       break;
     case K::stroke: {
+      // Script points are window pixels, as the mouse's are.
       scene_.begin_stroke(a.brush, orbit_.camera());
       for (size_t i = 0; i + 1 < a.points.size(); i += 2)
-        scene_.stroke_to(a.points[i], a.points[i + 1]);
+        scene_.stroke_to(a.points[i] - view_x_, a.points[i + 1]);
       last_stroke_ = scene_.end_stroke();
       if (display_ != Display::painted) display_ = Display::painted;
       break;
@@ -293,7 +303,30 @@ void Viewer::screenshot(const std::filesystem::path& path) {
                      rgba.begin() + ptrdiff_t(size_t(fb_h_ - 1 - y) * row));
   for (size_t i = 3; i < rgba.size(); i += 4) rgba[i] = 255;  // the window is opaque
   write_png(path, fb_w_, fb_h_, rgba);
-  std::fprintf(stderr, "limn-view: wrote %s (%dx%d)\n", path.string().c_str(), fb_w_, fb_h_);
+  // Where the view and the model are, in window pixels: what the tests check the framing by.
+  const Camera cam = orbit_.camera();
+  const Mesh& cage = scene_.cage();
+  double lo[2] = {1e30, 1e30}, hi[2] = {-1e30, -1e30};
+  for (size_t v = 0; v < cage.vertex_count(); ++v) {
+    double x, y;
+    if (!cam.project(&cage.positions[3 * v], x, y)) continue;
+    lo[0] = std::min(lo[0], x + view_x_), hi[0] = std::max(hi[0], x + view_x_);
+    lo[1] = std::min(lo[1], y), hi[1] = std::max(hi[1], y);
+  }
+  std::fprintf(stderr, "limn-view: wrote %s (%dx%d), view x %d-%d, cage x %.0f-%.0f y %.0f-%.0f\n",
+               path.string().c_str(), fb_w_, fb_h_, view_x_, fb_w_, lo[0], hi[0], lo[1], hi[1]);
+}
+
+void Viewer::frame_view() {
+  orbit_.frame(scene_.cage(), view_w(), std::max(fb_h_, 1));
+  framed_ = true, framed_w_ = view_w(), framed_h_ = fb_h_;
+}
+
+void Viewer::update_view_area() {
+  // At most two thirds of the window go to the panel: a narrow window shares it.
+  view_x_ = ui_ ? std::clamp(int(std::ceil(panel_right_)), 0, 2 * fb_w_ / 3) : 0;
+  orbit_.resize(view_w(), std::max(fb_h_, 1));
+  if (framed_ && (view_w() != framed_w_ || fb_h_ != framed_h_)) frame_view();
 }
 
 void Viewer::mouse() {
@@ -305,7 +338,7 @@ void Viewer::mouse() {
   last_x_ = x, last_y_ = y;
   const double scroll = std::exchange(scroll_, 0.0);
   const bool over_ui = io.WantCaptureMouse;
-  if (!over_ui && scroll != 0) orbit_.zoom(std::pow(0.9, scroll));
+  if (!over_ui && scroll != 0) orbit_.zoom(std::pow(0.9, scroll)), framed_ = false;
 
   if (drag_button_ >= 0 && glfwGetMouseButton(window_, drag_button_) != GLFW_PRESS) {
     if (drag_button_ == GLFW_MOUSE_BUTTON_LEFT && scene_.stroking())
@@ -319,7 +352,7 @@ void Viewer::mouse() {
         if (b == GLFW_MOUSE_BUTTON_LEFT && mode_ == Mode::paint) {
           display_ = Display::painted;
           scene_.begin_stroke(brush_, orbit_.camera());
-          scene_.stroke_to(x, y);
+          scene_.stroke_to(x - view_x_, y);
         }
         return;
       }
@@ -329,12 +362,12 @@ void Viewer::mouse() {
   // Left orbits (paints in paint mode), right orbits in paint mode and pans otherwise, middle
   // and shift-drags pan.
   if (drag_button_ == GLFW_MOUSE_BUTTON_LEFT && mode_ == Mode::paint) {
-    if (scene_.stroking()) scene_.stroke_to(x, y);
+    if (scene_.stroking()) scene_.stroke_to(x - view_x_, y);
   } else if (drag_button_ == GLFW_MOUSE_BUTTON_MIDDLE || shift ||
              (drag_button_ == GLFW_MOUSE_BUTTON_RIGHT && mode_ != Mode::paint)) {
-    orbit_.pan(dx, dy);
+    orbit_.pan(dx, dy), framed_ = false;
   } else {
-    orbit_.orbit(-0.4 * dx, 0.4 * dy);
+    orbit_.orbit(-0.4 * dx, 0.4 * dy), framed_ = false;
   }
 }
 
@@ -346,7 +379,7 @@ void Viewer::keys() {
   } else if (io.KeyCtrl && ImGui::IsKeyPressed(GLFW_KEY_Y)) {
     scene_.redo();
   } else if (ImGui::IsKeyPressed(GLFW_KEY_F, false)) {
-    orbit_.frame(scene_.cage(), fb_w_, fb_h_);
+    frame_view();
   } else if (ImGui::IsKeyPressed(GLFW_KEY_W, false)) {
     draw_.outline = !draw_.outline;
   } else if (ImGui::IsKeyPressed(GLFW_KEY_TAB, false)) {
@@ -491,6 +524,7 @@ void Viewer::panel() {
       ImGui::TextUnformatted(status_.c_str());
   }
   ImGui::PopItemWidth();
+  panel_right_ = double(ImGui::GetWindowPos().x + ImGui::GetWindowSize().x) * px_scale_;
   ImGui::End();
 }
 
@@ -499,12 +533,12 @@ void Viewer::frame() {
   int win_w = 1, win_h = 1;
   glfwGetWindowSize(window_, &win_w, &win_h);
   px_scale_ = win_w > 0 ? double(fb_w_) / win_w : 1.0;
-  orbit_.resize(std::max(fb_w_, 1), std::max(fb_h_, 1));
 
   ImGui_ImplOpenGL3_NewFrame();
   ImGui_ImplGlfw_NewFrame();
   ImGui::NewFrame();
   if (ui_) panel();
+  update_view_area();
   if (!o_.scripted) {
     guard([&] { mouse(); });
     guard([&] { keys(); });
@@ -521,12 +555,14 @@ void Viewer::frame() {
   glViewport(0, 0, fb_w_, fb_h_);
   glClearColor(background_[0], background_[1], background_[2], background_[3]);
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  glViewport(view_x_, 0, view_w(), fb_h_);
   if (fb_w_ > 0 && fb_h_ > 0) {
     DrawOptions d = draw_;
     d.pixels_per_segment = surface_.tess_px;
     guard([&] { stats_ = scene_.draw(display_, orbit_.camera(), surface_, d); });
     if (stats_.reselected) select_ms_ = stats_.select_ms;
   }
+  glViewport(0, 0, fb_w_, fb_h_);
   ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
   if (pending_shot_) {
     pending_shot_ = false;
@@ -545,7 +581,7 @@ void Viewer::run() {
     glfwPollEvents();
     if (o_.scripted) {
       glfwGetFramebufferSize(window_, &fb_w_, &fb_h_);
-      orbit_.resize(std::max(fb_w_, 1), std::max(fb_h_, 1));
+      update_view_area();
       if (!script_step()) break;
       frame();
       continue;
