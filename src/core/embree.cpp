@@ -4,6 +4,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 // The build names the library by its soname; builds without CMake (scripts/cross-check) get
 // Embree 3's.
@@ -15,6 +16,18 @@ namespace limn {
 
 namespace {
 
+#ifdef LIMN_EMBREE_LINKED
+// Sanitizer builds link Embree instead: LeakSanitizer cannot scan the dynamic TLS that a
+// dlopen'd Embree gives TBB's threads (its stop-the-world tracer crashes at exit), while a
+// library loaded at start has static TLS.
+EmbreeApi load() {
+  EmbreeApi api{};
+#define LIMN_EMBREE_TAKE(name) api.name = &::name;
+  LIMN_EMBREE_FUNCTIONS(LIMN_EMBREE_TAKE)
+#undef LIMN_EMBREE_TAKE
+  return api;
+}
+#else
 EmbreeApi load() {
   void* lib = dlopen(LIMN_EMBREE_LIBRARY, RTLD_NOW | RTLD_LOCAL);
   if (!lib) throw std::runtime_error(std::string("cannot load Embree: ") + dlerror());
@@ -23,30 +36,14 @@ EmbreeApi load() {
     void* sym = dlsym(lib, name);
     if (!sym)
       throw std::runtime_error(std::string(LIMN_EMBREE_LIBRARY) + " has no function " + name);
-    fn = reinterpret_cast<std::remove_reference_t<decltype(fn)>>(sym);
+    fn = reinterpret_cast<std::remove_reference_t<decltype(fn)> >(sym);
   };
-#define LIMN_BIND(name) bind(api.name, #name)
-  LIMN_BIND(rtcNewDevice);
-  LIMN_BIND(rtcReleaseDevice);
-  LIMN_BIND(rtcGetDeviceProperty);
-  LIMN_BIND(rtcNewScene);
-  LIMN_BIND(rtcReleaseScene);
-  LIMN_BIND(rtcSetSceneBuildQuality);
-  LIMN_BIND(rtcSetSceneFlags);
-  LIMN_BIND(rtcCommitScene);
-  LIMN_BIND(rtcNewGeometry);
-  LIMN_BIND(rtcSetNewGeometryBuffer);
-  LIMN_BIND(rtcCommitGeometry);
-  LIMN_BIND(rtcAttachGeometry);
-  LIMN_BIND(rtcReleaseGeometry);
-  LIMN_BIND(rtcPointQuery);
-  LIMN_BIND(rtcIntersect1);
-  LIMN_BIND(rtcOccluded1);
-  LIMN_BIND(rtcOccluded8);
-  LIMN_BIND(rtcOccluded16);
-#undef LIMN_BIND
+#define LIMN_EMBREE_BIND(name) bind(api.name, #name);
+  LIMN_EMBREE_FUNCTIONS(LIMN_EMBREE_BIND)
+#undef LIMN_EMBREE_BIND
   return api;  // the library stays loaded for the process's life
 }
+#endif
 
 }  // namespace
 

@@ -7,27 +7,33 @@
 
 #include <embree3/rtcore.h>
 
+// The functions limn calls, each once: the table's members and what is bound to them.
+#define LIMN_EMBREE_FUNCTIONS(X) \
+  X(rtcNewDevice)                \
+  X(rtcReleaseDevice)            \
+  X(rtcGetDeviceProperty)        \
+  X(rtcNewScene)                 \
+  X(rtcReleaseScene)             \
+  X(rtcSetSceneBuildQuality)     \
+  X(rtcSetSceneFlags)            \
+  X(rtcCommitScene)              \
+  X(rtcNewGeometry)              \
+  X(rtcSetNewGeometryBuffer)     \
+  X(rtcCommitGeometry)           \
+  X(rtcAttachGeometry)           \
+  X(rtcReleaseGeometry)          \
+  X(rtcPointQuery)               \
+  X(rtcIntersect1)               \
+  X(rtcOccluded1)                \
+  X(rtcOccluded8)                \
+  X(rtcOccluded16)
+
 namespace limn {
 
 struct EmbreeApi {
-  decltype(&::rtcNewDevice) rtcNewDevice;
-  decltype(&::rtcReleaseDevice) rtcReleaseDevice;
-  decltype(&::rtcGetDeviceProperty) rtcGetDeviceProperty;
-  decltype(&::rtcNewScene) rtcNewScene;
-  decltype(&::rtcReleaseScene) rtcReleaseScene;
-  decltype(&::rtcSetSceneBuildQuality) rtcSetSceneBuildQuality;
-  decltype(&::rtcSetSceneFlags) rtcSetSceneFlags;
-  decltype(&::rtcCommitScene) rtcCommitScene;
-  decltype(&::rtcNewGeometry) rtcNewGeometry;
-  decltype(&::rtcSetNewGeometryBuffer) rtcSetNewGeometryBuffer;
-  decltype(&::rtcCommitGeometry) rtcCommitGeometry;
-  decltype(&::rtcAttachGeometry) rtcAttachGeometry;
-  decltype(&::rtcReleaseGeometry) rtcReleaseGeometry;
-  decltype(&::rtcPointQuery) rtcPointQuery;
-  decltype(&::rtcIntersect1) rtcIntersect1;
-  decltype(&::rtcOccluded1) rtcOccluded1;
-  decltype(&::rtcOccluded8) rtcOccluded8;
-  decltype(&::rtcOccluded16) rtcOccluded16;
+#define LIMN_EMBREE_MEMBER(name) decltype(&::name) name;
+  LIMN_EMBREE_FUNCTIONS(LIMN_EMBREE_MEMBER)
+#undef LIMN_EMBREE_MEMBER
 };
 
 /// Embree's functions, the library loaded on the first call (thread-safe). Throws
