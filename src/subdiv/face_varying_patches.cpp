@@ -77,14 +77,8 @@ Mesh channel_mesh(const Mesh& cage, const SubdivOptions& o, const FaceVaryingInp
   const uint32_t* fo = cage.face_offsets.data();
   const uint32_t* fv = cage.face_vertices.data();
   // Faces around each vertex, ascending; crease tags by vertex; corner tags (a later tag wins).
-  std::vector<uint32_t> vfo(size_t(nv) + 1, 0), vf(cage.corner_count());
-  for (const uint32_t v : cage.face_vertices) ++vfo[v + 1];
-  for (uint32_t v = 0; v < nv; ++v) vfo[v + 1] += vfo[v];
-  {
-    std::vector<uint32_t> fill(vfo.begin(), vfo.end() - 1);
-    for (uint32_t f = 0; f < nf; ++f)
-      for (uint32_t c = fo[f]; c < fo[f + 1]; ++c) vf[fill[fv[c]]++] = f;
-  }
+  std::vector<uint32_t> vfo, vf;
+  vertex_faces(cage, vfo, vf);
   const size_t ncreases = cage.crease_sharpness.size();
   std::vector<uint32_t> cto(ncreases ? size_t(nv) + 1 : 0, 0), ct(2 * ncreases);
   if (ncreases) {

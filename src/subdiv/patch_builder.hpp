@@ -32,6 +32,20 @@ constexpr float kInf = kInfiniteSharpness;
 
 // First ptex face of each cage face (one per quad, one per corner of any other face), and the
 // total at the end.
+// The faces around each vertex of `cage`, ascending (CSR: offsets has vertex_count() + 1
+// entries); what region builds and the channel's blocks need of the topology, 8 bytes a corner.
+inline void vertex_faces(const Mesh& cage, std::vector<uint32_t>& offsets,
+                         std::vector<uint32_t>& faces) {
+  const size_t nv = cage.vertex_count(), nf = cage.face_count();
+  offsets.assign(nv + 1, 0);
+  for (const uint32_t v : cage.face_vertices) ++offsets[v + 1];
+  for (size_t v = 0; v < nv; ++v) offsets[v + 1] += offsets[v];
+  faces.resize(cage.corner_count());
+  std::vector<uint32_t> fill(offsets.begin(), offsets.end() - 1);
+  for (uint32_t f = 0; f < nf; ++f)
+    for (const uint32_t v : cage.face(f)) faces[fill[v]++] = f;
+}
+
 inline std::vector<uint32_t> ptex_offsets(const Mesh& cage) {
   std::vector<uint32_t> first(1, 0);
   first.reserve(cage.face_count() + 1);

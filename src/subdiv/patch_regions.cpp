@@ -42,17 +42,8 @@ class RegionBuilder {
   RegionBuilder(const Mesh& cage, const PatchOptions& o, std::span<const uint8_t> depth,
                 const Replay* replay = nullptr)
       : cage_(cage), o_(o), depth_(depth), replay_(replay) {
-    const size_t nf = cage.face_count(), nv = cage.vertex_count(), nc = cage.corner_count();
-    // Faces around each vertex (all the regions need of the cage's topology: 8 bytes a corner).
-    vertex_face_offsets_.assign(nv + 1, 0);
-    for (const uint32_t v : cage.face_vertices) ++vertex_face_offsets_[v + 1];
-    for (size_t v = 0; v < nv; ++v) vertex_face_offsets_[v + 1] += vertex_face_offsets_[v];
-    vertex_faces_.resize(nc);
-    {
-      std::vector<uint32_t> fill(vertex_face_offsets_.begin(), vertex_face_offsets_.end() - 1);
-      for (uint32_t f = 0; f < nf; ++f)
-        for (const uint32_t v : cage.face(f)) vertex_faces_[fill[v]++] = f;
-    }
+    const size_t nf = cage.face_count(), nv = cage.vertex_count();
+    vertex_faces(cage, vertex_face_offsets_, vertex_faces_);  // all the regions need of it
     // Crease tags by edge; each must be an edge of some face, as in the whole-cage build.
     for (size_t i = 0; i < cage.crease_sharpness.size(); ++i) {
       const uint32_t a = cage.crease_edges[2 * i], b = cage.crease_edges[2 * i + 1];
