@@ -366,15 +366,15 @@ Mesh read_obj(std::string_view data, std::string_view name) {
                               /*triangulate=*/false, /*default_vcols_fallback=*/false);
   };
   auto scan_all = [&] { scan = ObjScanner(data, name, mesh).run(); };
-  if (tag_lines_plausible(data) && data.size() >= kParallelBytes) {
+  if (!tag_lines_plausible(data)) {
+    scan_all();  // throws with the offending line; tinyobjloader never sees the data
+  } else if (data.size() >= kParallelBytes) {
     // The strict scan and tinyobjloader's parse read the same bytes independently: run them
     // side by side, so validation costs a second core rather than wall time.
     tbb::parallel_invoke(scan_all, parse);
-  } else if (tag_lines_plausible(data)) {
+  } else {
     scan_all();
     parse();
-  } else {
-    scan_all();  // throws with the offending line; tinyobjloader never sees the data
   }
   if (scan.v == 0)
     throw InputError(fmt::format("{}: no vertices (empty or not an OBJ file)", name));
