@@ -18,6 +18,7 @@ struct BakeOpts {
   std::string texture, mesh, out, format, resolution;
   int size = 1024, gutter = 8;
   bool nearest = false, json = false, weld = false;
+  RepairFlags repair;
 };
 
 void run(const BakeOpts& o, CLI::App* cmd) {
@@ -56,12 +57,14 @@ void run(const BakeOpts& o, CLI::App* cmd) {
   Stopwatch sw;
   const OctreeTexture tex = load_lot(o.texture);
   const double t_tex = sw.lap();
-  Mesh mesh = read_input(o.mesh, o.format, o.weld);
+  nlohmann::json repaired;
+  Mesh mesh = read_input(o.mesh, o.format, o.weld, o.repair, repaired);
   const double t_mesh = sw.lap();
   BakeOptions bo;
   bo.filtered = !o.nearest;
   nlohmann::json j = {{"texture", o.texture},
                       {"mesh", o.mesh},
+                      {"repair", repaired},
                       {"output", o.out},
                       {"filter", o.nearest ? "nearest" : "trilinear"}};
   if (png) {
@@ -123,6 +126,7 @@ void add_bake(CLI::App& app) {
   cmd->add_option("TEXTURE", o->texture, "Octree texture (.lot)")->required();
   cmd->add_option("MESH", o->mesh, "Mesh to bake onto (OBJ, PLY, OFF, STL, glTF/GLB)")->required();
   add_weld_flag(*cmd, o->weld);
+  add_repair_flags(*cmd, o->repair);
   cmd->add_option("-o,--output", o->out,
                   "Output: .ply/.glb/.obj/.off (vertex colours) or .png (needs the mesh's UVs)")
       ->required();

@@ -22,6 +22,7 @@ struct PaintOpts {
   std::string mesh, strokes, out, texture, stats, background = "0,0,0,0", format;
   int depth = 10;
   bool json = false, weld = false;
+  RepairFlags repair;
 };
 
 Rgba8 parse_color(const std::string& s, const char* option) {
@@ -89,7 +90,8 @@ void run_paint(const PaintOpts& o) {
   check_folder(o.out);
   const Rgba8 background = parse_color(o.background, "--background");
   Stopwatch sw;
-  const Mesh mesh = read_input(o.mesh, o.format, o.weld);
+  nlohmann::json repaired;
+  const Mesh mesh = read_input(o.mesh, o.format, o.weld, o.repair, repaired);
   const double t_read = sw.lap();
   const StrokeScript script = read_strokes(o.strokes, o.depth);
   const double t_parse = sw.lap();
@@ -123,6 +125,7 @@ void run_paint(const PaintOpts& o) {
                        {"found", p.found},
                        {"rgba", {p.rgba[0], p.rgba[1], p.rgba[2], p.rgba[3]}}});
     nlohmann::json j = {{"input", o.mesh},
+                        {"repair", repaired},
                         {"strokes_file", o.strokes},
                         {"output", o.out},
                         {"depth", o.depth},
@@ -173,6 +176,7 @@ void add_paint(CLI::App& app) {
   auto o = std::make_shared<PaintOpts>();
   cmd->add_option("MESH", o->mesh, "The mesh to paint (OBJ, PLY, OFF, STL, glTF/GLB)");
   add_weld_flag(*cmd, o->weld);
+  add_repair_flags(*cmd, o->repair);
   cmd->add_option("--strokes", o->strokes, "Stroke script (JSON; see docs/paint-strokes.md)");
   cmd->add_option("-o,--output", o->out, "Texture to write (.lot)");
   cmd->add_option("--depth", o->depth,

@@ -23,6 +23,7 @@ struct SimplifyOpts {
   uint64_t seed = 1;
   size_t iterations = 30, teleports = 16;
   bool polygons = false, json = false, no_fill = false, weld = false;
+  RepairFlags repair;
 };
 
 // The folder a file will be written into must exist before minutes of work are spent.
@@ -55,7 +56,8 @@ void run(const SimplifyOpts& o, CLI::App* cmd) {
   if (!o.labels.empty()) check_writable_folder(o.labels, "labels");
 
   Stopwatch sw;
-  const Mesh mesh = read_input(o.mesh, o.format, o.weld);
+  nlohmann::json repaired;
+  const Mesh mesh = read_input(o.mesh, o.format, o.weld, o.repair, repaired);
   const double t_read = sw.lap();
 
   VsaOptions vo;
@@ -120,6 +122,7 @@ void run(const SimplifyOpts& o, CLI::App* cmd) {
         {"input", o.mesh},
         {"output", o.out},
         {"dropped", dropped},
+        {"repair", repaired},
         {"labels", o.labels.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.labels)},
         {"method", o.method},
         {"seeding", o.seeding},
@@ -205,6 +208,7 @@ void add_simplify(CLI::App& app) {
       ->required();
   cmd->add_option("-o,--output", o->out, "Output mesh (.obj, .ply, .off, .stl, .glb)")->required();
   add_weld_flag(*cmd, o->weld);
+  add_repair_flags(*cmd, o->repair);
   cmd->add_option("--proxies", o->proxies,
                   "K, the number of clusters (polygons); default 100, or 10 to start from with "
                   "--target-error");

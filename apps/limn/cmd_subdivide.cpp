@@ -20,13 +20,14 @@ namespace limn::cli {
 namespace {
 
 void run_adaptive(const std::string& mesh, const std::string& out_path, const std::string& format,
-                  bool weld, const AdaptiveOpts& a, bool json) {
+                  bool weld, const RepairFlags& repair, const AdaptiveOpts& a, bool json) {
   if (format_from_path(out_path) == MeshFormat::automatic)
     throw InputError(fmt::format("{}: cannot tell the output format from the extension", out_path));
   int w = 1280, h = 720;
   check_adaptive(a, w, h);
   Stopwatch sw;
-  const Mesh cage = read_input(mesh, format, weld);
+  nlohmann::json repaired;
+  const Mesh cage = read_input(mesh, format, weld, repair, repaired);
   nlohmann::json timings = {{"read", sw.lap()}};
   const AdaptiveSurface surf = build_adaptive(cage, a, w, h, sw, timings);
   const bool dynamic = a.dynamic, measured = surf.measured;
@@ -76,6 +77,7 @@ void run_adaptive(const std::string& mesh, const std::string& out_path, const st
         boundary += p.boundary != 0, transition += p.transition != 0;
     nlohmann::json j = {
         {"input", mesh},
+        {"repair", repaired},
         {"output", out_path},
         {"mode", dynamic ? "tolerance" : "depth"},
         {"depth", dynamic ? a.max_depth : depth},
@@ -119,6 +121,7 @@ void add_subdivide(CLI::App& app) {
     std::string mesh, out, format;
     int uniform = -1;
     bool limit = false, json = false, adaptive = false, weld = false;
+    RepairFlags repair;
     AdaptiveOpts a;
   };
   auto o = std::make_shared<Opts>();
@@ -130,6 +133,7 @@ void add_subdivide(CLI::App& app) {
                   "colours; seams split), .off/.stl (geometry only)")
       ->required();
   add_weld_flag(*cmd, o->weld);
+  add_repair_flags(*cmd, o->repair);
   cmd->add_option("--uniform", o->uniform, "Refine every face L times (0-8)");
   cmd->add_flag("--limit", o->limit, "Push the points to the limit surface, with limit normals");
   cmd->add_flag("--adaptive", o->adaptive,
@@ -153,7 +157,7 @@ void add_subdivide(CLI::App& app) {
       if (cmd->count("--tess-px") && !(o->a.tess_px > 0 && std::isfinite(o->a.tess_px)))
         throw InputError(
             fmt::format("--tess-px {}: must be a positive number of pixels", o->a.tess_px));
-      run_adaptive(o->mesh, o->out, o->format, o->weld, o->a, o->json);
+      run_adaptive(o->mesh, o->out, o->format, o->weld, o->repair, o->a, o->json);
       return;
     }
     if (o->uniform < 0 || o->uniform > 8)
@@ -161,7 +165,8 @@ void add_subdivide(CLI::App& app) {
     if (format_from_path(o->out) == MeshFormat::automatic)
       throw InputError(fmt::format("{}: cannot tell the output format from the extension", o->out));
     Stopwatch sw;
-    const Mesh cage = read_input(o->mesh, o->format, o->weld);
+    nlohmann::json repaired;
+    const Mesh cage = read_input(o->mesh, o->format, o->weld, o->repair, repaired);
     const double t_read = sw.lap();
     // Every level multiplies corners by 4 (after the first, which makes one quad per corner).
     // The lean path needs ~70 bytes per output quad; with --limit every level, its stencils and
@@ -261,6 +266,7 @@ void add_subdivide(CLI::App& app) {
 
     if (o->json) {
       nlohmann::json j = {{"input", o->mesh},
+                          {"repair", repaired},
                           {"output", o->out},
                           {"level", o->uniform},
                           {"limit", o->limit},

@@ -33,6 +33,84 @@ void add_weld_flag(CLI::App& cmd, bool& weld) {
                "vertex (needed to subdivide or simplify a glTF mesh as one surface)");
 }
 
+void add_repair_flags(CLI::App& cmd, RepairFlags& repair) {
+  cmd.add_flag("--repair", repair.on,
+               "Repair the mesh first, as `limn repair` does (weld, drop degenerate and duplicate "
+               "faces, orient, split non-manifold edges and vertices); counts on stderr and in "
+               "--json");
+  cmd.add_option("--weld-tolerance", repair.tolerance,
+                 "With --repair: weld vertices closer than this fraction of the bounding-box "
+                 "diagonal (0: only equal positions)")
+      ->check(CLI::Range(0.0, 0.1));
+}
+
+Mesh repair_input(const Mesh& mesh, const std::string& path, const RepairOptions& options,
+                  RepairReport& report) {
+  if (mesh.face_count() == 0) throw InputError(fmt::format("{}: no faces to repair", path));
+  Mesh out = repair_mesh(mesh, options, &report);
+  if (out.face_count() == 0)
+    throw InputError(fmt::format("{}: nothing left after repair: all {} faces are degenerate", path,
+                                 mesh.face_count()));
+  fmt::print(stderr, "limn: repair {}: {}\n", path, repair_summary(report));
+  return out;
+}
+
+Mesh read_input(const std::string& path, const std::string& format, bool weld,
+                const RepairFlags& repair, nlohmann::json& report) {
+  if (!repair.on) {
+    report = nullptr;
+    return read_input(path, format, weld);
+  }
+  ReadOptions r;
+  r.format = parse_format_option(format, "--format");
+  r.weld = weld;
+  r.soup = true;
+  size_t dropped = 0;
+  r.dropped_degenerate = &dropped;
+  const Mesh soup = read_mesh(path, r);
+  RepairOptions options;
+  options.weld_tolerance = repair.tolerance;
+  RepairReport counts;
+  Mesh out = repair_input(soup, path, options, counts);
+  counts.degenerate_faces += dropped;  // STL and glTF drop theirs while reading
+  report = repair_json(counts);
+  return out;
+}
+
+nlohmann::json repair_json(const RepairReport& r) {
+  return {{"welded_vertices", r.welded_vertices},
+          {"degenerate_faces", r.degenerate_faces},
+          {"split_faces", r.split_faces},
+          {"duplicate_faces", r.duplicate_faces},
+          {"flipped_faces", r.flipped_faces},
+          {"non_manifold_edges", r.non_manifold_edges},
+          {"unorientable_edges", r.unorientable_edges},
+          {"split_vertices", r.split_vertices},
+          {"unreferenced_vertices", r.unreferenced_vertices},
+          {"components", r.components},
+          {"closed_components", r.closed_components}};
+}
+
+std::string repair_summary(const RepairReport& r) {
+  std::vector<std::string> parts;
+  const auto add = [&](size_t n, const char* one, const char* many) {
+    if (n) parts.push_back(fmt::format("{} {}", n, n == 1 ? one : many));
+  };
+  add(r.welded_vertices, "vertex welded", "vertices welded");
+  add(r.degenerate_faces, "degenerate face dropped", "degenerate faces dropped");
+  add(r.split_faces, "pinched face split", "pinched faces split");
+  add(r.duplicate_faces, "duplicate face dropped", "duplicate faces dropped");
+  add(r.flipped_faces, "face flipped", "faces flipped");
+  add(r.non_manifold_edges, "non-manifold edge cut", "non-manifold edges cut");
+  add(r.unorientable_edges, "unorientable edge cut", "unorientable edges cut");
+  add(r.split_vertices, "vertex copy added", "vertex copies added");
+  add(r.unreferenced_vertices, "unreferenced vertex dropped", "unreferenced vertices dropped");
+  const std::string pieces = fmt::format("{} piece{} ({} closed)", r.components,
+                                         r.components == 1 ? "" : "s", r.closed_components);
+  if (parts.empty()) return "nothing to repair; " + pieces;
+  return fmt::format("{}; {}", fmt::join(parts, ", "), pieces);
+}
+
 nlohmann::json write_output(const Mesh& mesh, const std::string& path,
                             std::vector<std::string> lost, const WriteOptions& opt) {
   MeshFormat format = opt.format;

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "limn/io/mesh_io.hpp"
+#include "limn/mesh/repair.hpp"
 #include "limn/mesh/topology.hpp"
 
 namespace limn::cli {
@@ -20,6 +21,7 @@ void add_simplify(CLI::App& app);
 void add_paint(CLI::App& app);
 void add_bake(CLI::App& app);
 void add_render(CLI::App& app);
+void add_repair(CLI::App& app);
 
 /// Milliseconds since construction.
 class Stopwatch {
@@ -47,6 +49,27 @@ Mesh read_input(const std::string& path, const std::string& format, bool weld,
                 size_t* dropped_degenerate = nullptr, const char* format_option = "--format");
 /// Adds --weld to a command that reads a mesh.
 void add_weld_flag(CLI::App& cmd, bool& weld);
+
+/// --repair and --weld-tolerance of a command that reads a mesh.
+struct RepairFlags {
+  bool on = false;
+  double tolerance = RepairOptions{}.weld_tolerance;
+};
+/// Adds --repair and --weld-tolerance to a command.
+void add_repair_flags(CLI::App& cmd, RepairFlags& repair);
+/// read_input, then with --repair: the file is read as a polygon soup (faces may repeat a
+/// vertex) and repaired, its summary printed as one line on stderr. `report` receives the
+/// counts as JSON (repair_json), or null without --repair. InputError when nothing is left.
+Mesh read_input(const std::string& path, const std::string& format, bool weld,
+                const RepairFlags& repair, nlohmann::json& report);
+/// Repairs `mesh` read from `path` (repair_mesh), prints the summary line on stderr and returns
+/// the result; InputError naming `path` when it has no faces before or after.
+Mesh repair_input(const Mesh& mesh, const std::string& path, const RepairOptions& options,
+                  RepairReport& report);
+/// The counts of a repair as a JSON object.
+nlohmann::json repair_json(const RepairReport& r);
+/// One line: "welded 3 vertices, dropped 2 degenerate faces, ..." or "nothing to repair".
+std::string repair_summary(const RepairReport& r);
 
 /// `--format` values accepted for input/output overrides.
 MeshFormat parse_format_option(const std::string& value, const char* option);

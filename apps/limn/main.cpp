@@ -34,6 +34,7 @@ int main(int argc, char** argv) {
   limn::cli::add_paint(app);
   limn::cli::add_bake(app);
   limn::cli::add_render(app);
+  limn::cli::add_repair(app);
   limn::cli::add_demo(app);
   try {
     app.parse(argc, argv);
@@ -41,6 +42,15 @@ int main(int argc, char** argv) {
     return app.exit(e);  // --help, --version
   } catch (const CLI::ParseError& e) {
     app.exit(e);
+    return 2;
+  } catch (const limn::RepairableError& e) {
+    // One line still: the problem, then what fixes it.
+    bool has_flag = false;
+    for (const CLI::App* sub : app.get_subcommands())
+      has_flag |= sub->get_option_no_throw("--repair") != nullptr;
+    std::fprintf(
+        stderr, "limn: error: %s (%s)\n", e.what(),
+        has_flag ? "rerun with --repair, or run limn repair on it" : "limn repair fixes this");
     return 2;
   } catch (const limn::InputError& e) {
     std::fprintf(stderr, "limn: error: %s\n", e.what());

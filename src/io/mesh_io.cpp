@@ -76,11 +76,11 @@ Mesh read_mesh_memory(std::string_view data, const ReadOptions& opt, std::string
   if (opt.dropped_degenerate) *opt.dropped_degenerate = 0;
   switch (format) {
     case MeshFormat::obj:
-      return read_obj(data, name);
+      return read_obj(data, name, opt.soup);
     case MeshFormat::ply:
-      return read_ply(data, name);
+      return read_ply(data, name, opt.soup);
     case MeshFormat::off:
-      return read_off(data, name);
+      return read_off(data, name, opt.soup);
     case MeshFormat::stl:
       return read_stl(data, name, opt.dropped_degenerate);
     case MeshFormat::glb:

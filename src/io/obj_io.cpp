@@ -52,8 +52,8 @@ struct ScanResult {
 
 class ObjScanner {
  public:
-  ObjScanner(std::string_view data, std::string_view name, Mesh& mesh)
-      : data_(data), name_(name), mesh_(mesh) {}
+  ObjScanner(std::string_view data, std::string_view name, Mesh& mesh, bool soup)
+      : data_(data), name_(name), mesh_(mesh), soup_(soup) {}
 
   ScanResult run() {
     const char* p = data_.data();
@@ -119,7 +119,9 @@ class ObjScanner {
     for (std::string_view t = c.token(); !t.empty(); t = c.token()) {
       const size_t s1 = t.find('/');
       index(t.substr(0, s1), r_.v, r_.max_v, r_.max_v_line, "vertex");
-      face_.push_back(last_);
+      // No mesh limn holds has 2^32 vertices: a larger index is out of range, not a repeat.
+      if (last_ >= kNoRepeat) fail(fmt::format("vertex index {} out of range", last_ + 1));
+      face_.push_back(static_cast<uint32_t>(last_));
       bool has_uv = false, has_n = false;
       if (s1 != std::string_view::npos) {
         std::string_view rest = t.substr(s1 + 1);
@@ -140,16 +142,10 @@ class ObjScanner {
     }
     if (face_.size() < 3)
       fail(fmt::format("face has {} vertices (at least 3 needed)", face_.size()));
-    if (face_.size() <= 16) {  // quadratic only while that is cheaper than sorting
-      for (size_t i = 1; i < face_.size(); ++i)
-        for (size_t j = 0; j < i; ++j)
-          if (face_[i] == face_[j]) fail(fmt::format("face repeats vertex {}", face_[i] + 1));
-    } else {
-      sorted_.assign(face_.begin(), face_.end());
-      std::sort(sorted_.begin(), sorted_.end());
-      const auto dup = std::adjacent_find(sorted_.begin(), sorted_.end());
-      if (dup != sorted_.end()) fail(fmt::format("face repeats vertex {}", *dup + 1));
-    }
+    if (!soup_)
+      if (const uint32_t r = repeated_vertex(face_, sorted_); r != kNoRepeat)
+        throw RepairableError(
+            fmt::format("{}: line {}: face repeats vertex {}", name_, line_, r + 1));
     if (any_uv != all_uv) fail("face mixes corners with and without texture coordinates");
     if (any_n != all_n) fail("face mixes corners with and without normals");
     ++r_.faces;
@@ -287,10 +283,11 @@ class ObjScanner {
 
   std::string_view data_, name_;
   Mesh& mesh_;
+  bool soup_;
   ScanResult r_;
   size_t line_ = 0;
   size_t last_ = 0;
-  std::vector<size_t> face_, sorted_;
+  std::vector<uint32_t> face_, sorted_;
   std::vector<uint32_t> ints_;
   std::vector<float> floats_;
   std::vector<std::string_view> strings_;
@@ -347,7 +344,7 @@ struct MemoryBuffer : std::streambuf {
 // cost more than the second core saves (~25 ms on the reference machine, at a process's start).
 constexpr size_t kParallelBytes = size_t(4) << 20;
 
-Mesh read_obj(std::string_view data, std::string_view name) {
+Mesh read_obj(std::string_view data, std::string_view name, bool soup) {
   if (data.size() >= 3 && std::memcmp(data.data(), "\xEF\xBB\xBF", 3) == 0) data.remove_prefix(3);
   if (std::memchr(data.data(), '\0', data.size()) != nullptr)
     throw InputError(fmt::format("{}: contains NUL bytes (binary data, not an OBJ file)", name));
@@ -365,7 +362,7 @@ Mesh read_obj(std::string_view data, std::string_view name) {
     parsed = tinyobj::LoadObj(&attrib, &shapes, &materials, &warn, &err, &in, nullptr,
                               /*triangulate=*/false, /*default_vcols_fallback=*/false);
   };
-  auto scan_all = [&] { scan = ObjScanner(data, name, mesh).run(); };
+  auto scan_all = [&] { scan = ObjScanner(data, name, mesh, soup).run(); };
   if (!tag_lines_plausible(data)) {
     scan_all();  // throws with the offending line; tinyobjloader never sees the data
   } else if (data.size() >= kParallelBytes) {
@@ -412,7 +409,7 @@ Mesh read_obj(std::string_view data, std::string_view name) {
   if (mesh.face_count() != scan.faces || mesh.corner_count() != scan.corners)
     throw InputError(fmt::format("{}: parser disagreement: {} corners scanned, {} parsed", name,
                                  scan.corners, mesh.corner_count()));
-  validate(mesh, std::string(name));
+  (soup ? validate_soup : validate)(mesh, std::string(name));
   return mesh;
 }
 

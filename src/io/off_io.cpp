@@ -27,7 +27,8 @@ bool is_integer_token(std::string_view t) {
 
 class OffReader {
  public:
-  OffReader(std::string_view data, std::string_view name) : data_(data), name_(name) {}
+  OffReader(std::string_view data, std::string_view name, bool soup)
+      : data_(data), name_(name), soup_(soup) {}
 
   Mesh read() {
     if (data_.size() >= 3 && std::memcmp(data_.data(), "\xEF\xBB\xBF", 3) == 0)
@@ -40,7 +41,7 @@ class OffReader {
       fail(fmt::format("unexpected data after the last face ('{}')", printable(token())));
     if (normals_) mesh_.normal_indices = mesh_.face_vertices;
     if (uvs_) mesh_.uv_indices = mesh_.face_vertices;
-    validate(mesh_, std::string(name_));
+    (soup_ ? validate_soup : validate)(mesh_, std::string(name_));
     return std::move(mesh_);
   }
 
@@ -217,17 +218,10 @@ class OffReader {
           fail("face", i,
                fmt::format("unexpected value '{}' after the vertex indices", printable(t)));
       }
-      // Arity is small for almost every face; sorting a copy only pays for large polygons.
-      if (face.size() <= 16) {
-        for (size_t k = 1; k < face.size(); ++k)
-          for (size_t j = 0; j < k; ++j)
-            if (face[j] == face[k]) fail("face", i, fmt::format("repeats vertex {}", face[k]));
-      } else {
-        sorted = face;
-        std::sort(sorted.begin(), sorted.end());
-        const auto dup = std::adjacent_find(sorted.begin(), sorted.end());
-        if (dup != sorted.end()) fail("face", i, fmt::format("repeats vertex {}", *dup));
-      }
+      if (!soup_)
+        if (const uint32_t r = repeated_vertex(face, sorted); r != kNoRepeat)
+          throw RepairableError(
+              fmt::format("{}: line {}: face {}: repeats vertex {}", name_, line_, i, r));
       if (mesh_.face_vertices.size() + face.size() > UINT32_MAX)
         fail("face", i, "more face corners than 32-bit offsets can address");
       mesh_.add_face(face);
@@ -235,6 +229,7 @@ class OffReader {
   }
 
   std::string_view data_, name_;
+  bool soup_;
   size_t pos_ = 0, line_ = 0;
   const char* cur_ = nullptr;
   const char* lend_ = nullptr;
@@ -245,8 +240,8 @@ class OffReader {
 
 }  // namespace
 
-Mesh read_off(std::string_view data, std::string_view name) {
-  return OffReader(data, name).read();
+Mesh read_off(std::string_view data, std::string_view name, bool soup) {
+  return OffReader(data, name, soup).read();
 }
 
 void write_off(const Mesh& m, std::string& out) {

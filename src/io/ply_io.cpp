@@ -135,11 +135,14 @@ struct Where {
   size_t line = 0;  // 0 in binary bodies, where lines mean nothing
 };
 
-[[noreturn]] void fail(const Where& w, std::string_view msg) {
+std::string message(const Where& w, std::string_view msg) {
   if (w.line != 0)
-    throw InputError(
-        fmt::format("{}: line {}: {} {}: {}", w.file, w.line, w.element, w.index, msg));
-  throw InputError(fmt::format("{}: {} {}: {}", w.file, w.element, w.index, msg));
+    return fmt::format("{}: line {}: {} {}: {}", w.file, w.line, w.element, w.index, msg);
+  return fmt::format("{}: {} {}: {}", w.file, w.element, w.index, msg);
+}
+
+[[noreturn]] void fail(const Where& w, std::string_view msg) {
+  throw InputError(message(w, msg));
 }
 
 // Narrows without the undefined behaviour of converting an out-of-range double to float.
@@ -369,7 +372,8 @@ class BinarySource {
 
 class PlyReader {
  public:
-  PlyReader(std::string_view data, std::string_view name) : data_(data), name_(name) {
+  PlyReader(std::string_view data, std::string_view name, bool soup)
+      : data_(data), name_(name), soup_(soup) {
     where_.file = name_;
   }
 
@@ -396,7 +400,7 @@ class PlyReader {
     }
     if (has_normals_) mesh_.normal_indices = mesh_.face_vertices;
     if (has_uvs_) mesh_.uv_indices = mesh_.face_vertices;
-    validate(mesh_, std::string(name_));
+    (soup_ ? validate_soup : validate)(mesh_, std::string(name_));
     return std::move(mesh_);
   }
 
@@ -712,17 +716,9 @@ class PlyReader {
       check_index(f[k]);
       face_[k] = static_cast<uint32_t>(f[k]);
     }
-    // Arity is small for almost every face; sorting a copy only pays for large polygons.
-    if (f.size() <= 16) {
-      for (size_t k = 1; k < f.size(); ++k)
-        for (size_t j = 0; j < k; ++j)
-          if (face_[j] == face_[k]) fail(where_, fmt::format("repeats vertex {}", face_[k]));
-    } else {
-      sorted_ = face_;
-      std::sort(sorted_.begin(), sorted_.end());
-      const auto dup = std::adjacent_find(sorted_.begin(), sorted_.end());
-      if (dup != sorted_.end()) fail(where_, fmt::format("repeats vertex {}", *dup));
-    }
+    if (!soup_)
+      if (const uint32_t r = repeated_vertex(face_, sorted_); r != kNoRepeat)
+        throw RepairableError(message(where_, fmt::format("repeats vertex {}", r)));
     append_face(face_.data(), face_.size());
   }
 
@@ -894,12 +890,13 @@ class PlyReader {
   Mesh mesh_;
   std::vector<int64_t> scratch_;
   std::vector<uint32_t> face_, sorted_;
+  bool soup_;
 };
 
 }  // namespace
 
-Mesh read_ply(std::string_view data, std::string_view name) {
-  return PlyReader(data, name).read();
+Mesh read_ply(std::string_view data, std::string_view name, bool soup) {
+  return PlyReader(data, name, soup).read();
 }
 
 namespace {

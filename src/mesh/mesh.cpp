@@ -84,6 +84,20 @@ std::vector<float> vertex_normals(const Mesh& mesh) {
   return n;
 }
 
+uint32_t repeated_vertex(std::span<const uint32_t> face, std::vector<uint32_t>& scratch) {
+  const size_t n = face.size();
+  if (n <= 16) {
+    for (size_t i = 1; i < n; ++i)
+      for (size_t j = 0; j < i; ++j)
+        if (face[j] == face[i]) return face[i];
+    return kNoRepeat;
+  }
+  scratch.assign(face.begin(), face.end());
+  std::sort(scratch.begin(), scratch.end());
+  const auto dup = std::adjacent_find(scratch.begin(), scratch.end());
+  return dup == scratch.end() ? kNoRepeat : *dup;
+}
+
 namespace {
 
 void check_indices(const std::vector<uint32_t>& idx, size_t bound, const char* kind, const Mesh& m,
@@ -101,9 +115,7 @@ void check_indices(const std::vector<uint32_t>& idx, size_t bound, const char* k
     }
 }
 
-}  // namespace
-
-void validate(const Mesh& m, const std::string& what) {
+void check(const Mesh& m, const std::string& what, bool simple_faces) {
   if (m.positions.size() % 3 != 0)
     throw InputError(
         fmt::format("{}: position array size {} is not a multiple of 3", what, m.positions.size()));
@@ -127,20 +139,9 @@ void validate(const Mesh& m, const std::string& what) {
       if (fv[i] >= nv)
         throw InputError(fmt::format("{}: face {} references vertex {} but there are {} vertices",
                                      what, f, fv[i], nv));
-    // Small faces: a quadratic scan beats sorting a copy. Large ones (a hostile file can hold a
-    // 10^6-gon) must stay O(n log n).
-    if (fv.size() <= 16) {
-      for (size_t i = 1; i < fv.size(); ++i)
-        for (size_t j = 0; j < i; ++j)
-          if (fv[j] == fv[i])
-            throw InputError(fmt::format("{}: face {} repeats vertex {}", what, f, fv[i]));
-    } else {
-      sorted.assign(fv.begin(), fv.end());
-      std::sort(sorted.begin(), sorted.end());
-      const auto dup = std::adjacent_find(sorted.begin(), sorted.end());
-      if (dup != sorted.end())
-        throw InputError(fmt::format("{}: face {} repeats vertex {}", what, f, *dup));
-    }
+    if (!simple_faces) continue;
+    if (const uint32_t r = repeated_vertex(fv, sorted); r != kNoRepeat)
+      throw RepairableError(fmt::format("{}: face {} repeats vertex {}", what, f, r));
   }
   check_indices(m.normal_indices, m.normals.size() / 3, "normal", m, what);
   check_indices(m.uv_indices, m.uvs.size() / 2, "uv", m, what);
@@ -177,6 +178,16 @@ void validate(const Mesh& m, const std::string& what) {
   for (uint32_t f : m.hole_faces)
     if (f >= m.face_count())
       throw InputError(fmt::format("{}: hole tag references face {} out of range", what, f));
+}
+
+}  // namespace
+
+void validate(const Mesh& mesh, const std::string& what) {
+  check(mesh, what, true);
+}
+
+void validate_soup(const Mesh& mesh, const std::string& what) {
+  check(mesh, what, false);
 }
 
 }  // namespace limn

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <cstring>
 
 namespace limn {
@@ -74,25 +75,140 @@ void dedupe_attribute(const std::vector<float>& values, const std::vector<uint32
   }
 }
 
-// Small faces: a quadratic scan beats sorting; large ones (a hostile file can hold a 10^6-gon)
-// stay O(n log n).
-bool repeats_vertex(const std::vector<uint32_t>& face) {
-  const size_t n = face.size();
-  if (n <= 16) {
-    for (size_t i = 1; i < n; ++i)
-      for (size_t j = 0; j < i; ++j)
-        if (face[i] == face[j]) return true;
-    return false;
-  }
-  std::vector<uint32_t> sorted = face;
-  std::sort(sorted.begin(), sorted.end());
-  return std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end();
-}
-
 }  // namespace
 
 std::vector<uint32_t> weld_map(std::span<const float> xyz, uint32_t* groups) {
   return group_equal(xyz.data(), xyz.size() / 3, 3, groups);
+}
+
+namespace {
+
+// Union-find over point indices; the root of a set is its smallest index.
+uint32_t find_root(std::vector<uint32_t>& parent, uint32_t i) {
+  while (parent[i] != i) i = parent[i] = parent[parent[i]];
+  return i;
+}
+
+void unite(std::vector<uint32_t>& parent, uint32_t a, uint32_t b) {
+  a = find_root(parent, a), b = find_root(parent, b);
+  if (a < b) parent[b] = a;
+  if (b < a) parent[a] = b;
+}
+
+}  // namespace
+
+std::vector<uint32_t> weld_map_within(std::span<const float> xyz, double tolerance,
+                                      uint32_t* groups) {
+  uint32_t exact_groups = 0;
+  std::vector<uint32_t> group = weld_map(xyz, &exact_groups);
+  if (!(tolerance > 0) || exact_groups < 2) {
+    if (groups) *groups = exact_groups;
+    return group;
+  }
+  // One representative (the first point) per bit-equal group; the grid holds those only.
+  const size_t n = group.size();
+  std::vector<uint32_t> first(exact_groups, kEmpty);
+  for (size_t i = 0; i < n; ++i)
+    if (first[group[i]] == kEmpty) first[group[i]] = static_cast<uint32_t>(i);
+  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (const uint32_t p : first)
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = std::min(lo[k], double(xyz[3 * size_t(p) + k]));
+      hi[k] = std::max(hi[k], double(xyz[3 * size_t(p) + k]));
+    }
+  // Cell coordinates must fit int64; a tolerance this far below the extent welds nothing more
+  // than bit-equality does at float precision anyway.
+  for (int k = 0; k < 3; ++k)
+    if ((hi[k] - lo[k]) / tolerance > 1e15) {
+      if (groups) *groups = exact_groups;
+      return group;
+    }
+
+  // Cells of edge `tolerance`: points within it of each other lie in the same or adjacent cells.
+  // Cells sorted lexicographically, so each cell's points form one run of `order`.
+  struct Cell {
+    int64_t x, y, z;
+    auto operator<=>(const Cell&) const = default;
+  };
+  const auto cell_of = [&](uint32_t p) {
+    const float* q = &xyz[3 * size_t(p)];
+    return Cell{int64_t((q[0] - lo[0]) / tolerance), int64_t((q[1] - lo[1]) / tolerance),
+                int64_t((q[2] - lo[2]) / tolerance)};
+  };
+  std::vector<Cell> cell(exact_groups);
+  for (uint32_t g = 0; g < exact_groups; ++g) cell[g] = cell_of(first[g]);
+  std::vector<uint32_t> order(exact_groups);
+  for (uint32_t g = 0; g < exact_groups; ++g) order[g] = g;
+  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return cell[a] < cell[b]; });
+  std::vector<uint32_t> run_start;  // run r spans order[run_start[r] .. run_start[r + 1])
+  for (uint32_t i = 0; i < exact_groups; ++i)
+    if (i == 0 || cell[order[i]] != cell[order[i - 1]]) run_start.push_back(i);
+  const uint32_t runs = static_cast<uint32_t>(run_start.size());
+  run_start.push_back(exact_groups);
+
+  // Open-addressing table: cell -> run.
+  const auto hash = [](const Cell& c) {
+    uint64_t h = uint64_t(c.x) * 0x9E3779B97F4A7C15ull ^ uint64_t(c.y) * 0xC2B2AE3D27D4EB4Full ^
+                 uint64_t(c.z) * 0x165667B19E3779F9ull;
+    h ^= h >> 31;
+    return h * 0xBF58476D1CE4E5B9ull;
+  };
+  size_t cap = 16;
+  while (cap < 2 * size_t(runs)) cap *= 2;
+  std::vector<uint32_t> table(cap, kEmpty);
+  for (uint32_t r = 0; r < runs; ++r)
+    for (size_t s = hash(cell[order[run_start[r]]]) & (cap - 1);; s = (s + 1) & (cap - 1))
+      if (table[s] == kEmpty) {
+        table[s] = r;
+        break;
+      }
+  const auto find_run = [&](const Cell& c) {
+    for (size_t s = hash(c) & (cap - 1);; s = (s + 1) & (cap - 1)) {
+      const uint32_t r = table[s];
+      if (r == kEmpty || cell[order[run_start[r]]] == c) return r;
+    }
+  };
+
+  // Each pair of cells once: the cell itself and the 13 neighbours that follow it.
+  const double tol2 = tolerance * tolerance;
+  const auto close = [&](uint32_t a, uint32_t b) {
+    const float* p = &xyz[3 * size_t(first[a])];
+    const float* q = &xyz[3 * size_t(first[b])];
+    double d2 = 0;
+    for (int k = 0; k < 3; ++k) d2 += (double(p[k]) - q[k]) * (double(p[k]) - q[k]);
+    return d2 <= tol2;
+  };
+  std::vector<uint32_t> parent(exact_groups);
+  for (uint32_t g = 0; g < exact_groups; ++g) parent[g] = g;
+  for (uint32_t r = 0; r < runs; ++r) {
+    const Cell c = cell[order[run_start[r]]];
+    for (uint32_t i = run_start[r]; i < run_start[r + 1]; ++i)
+      for (uint32_t j = i + 1; j < run_start[r + 1]; ++j)
+        if (close(order[i], order[j])) unite(parent, order[i], order[j]);
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          const Cell d{c.x + dx, c.y + dy, c.z + dz};
+          if (!(c < d)) continue;
+          const uint32_t s = find_run(d);
+          if (s == kEmpty) continue;
+          for (uint32_t i = run_start[r]; i < run_start[r + 1]; ++i)
+            for (uint32_t j = run_start[s]; j < run_start[s + 1]; ++j)
+              if (close(order[i], order[j])) unite(parent, order[i], order[j]);
+        }
+  }
+
+  // Renumber in order of first point. A set's root is its smallest exact group, and exact
+  // groups are numbered in order of their first point, so the root's first point comes first.
+  std::vector<uint32_t> number(exact_groups, kEmpty);
+  uint32_t count = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const uint32_t root = find_root(parent, group[i]);
+    if (number[root] == kEmpty) number[root] = count++;
+    group[i] = number[root];
+  }
+  if (groups) *groups = count;
+  return group;
 }
 
 Mesh weld_vertices(const Mesh& m, size_t* dropped_faces) {
@@ -117,12 +233,12 @@ Mesh weld_vertices(const Mesh& m, size_t* dropped_faces) {
   kept_corners.reserve(m.corner_count());
   out.face_vertices.reserve(m.corner_count());
   size_t dropped = 0;
-  std::vector<uint32_t> face;
+  std::vector<uint32_t> face, scratch;
   for (size_t f = 0; f < m.face_count(); ++f) {
     const uint32_t o = m.face_offsets[f], n = m.face_size(f);
     face.clear();
     for (uint32_t i = 0; i < n; ++i) face.push_back(map[m.face_vertices[o + i]]);
-    if (repeats_vertex(face)) {
+    if (repeated_vertex(face, scratch) != kNoRepeat) {
       ++dropped;
       continue;
     }

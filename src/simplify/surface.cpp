@@ -29,13 +29,13 @@ VsaSurface prepare_surface(const Mesh& mesh, std::string_view name) {
     const uint32_t tw = t.corner_twin[c];
     if (tw == kNonManifold) {
       const uint32_t e = t.corner_edge[c];
-      throw InputError(fmt::format(
+      throw RepairableError(fmt::format(
           "{}: non-manifold edge {}-{} (shared by {} faces); simplify needs an edge-manifold mesh",
           name, t.edge_vertices[2 * size_t(e)], t.edge_vertices[2 * size_t(e) + 1],
           t.edge_faces[e]));
     }
     if (tw != kNone && fv[tw] == fv[c])
-      throw InputError(fmt::format("{}: faces {} and {} disagree on orientation across edge {}-{}",
+      throw RepairableError(fmt::format("{}: faces {} and {} disagree on orientation across edge {}-{}",
                                    name, t.corner_face[c], t.corner_face[tw], fv[c],
                                    fv[t.corner_next[c]]));
   }
@@ -52,7 +52,7 @@ VsaSurface prepare_surface(const Mesh& mesh, std::string_view name) {
     for (uint32_t i = 0; i < n && same; ++i)
       same = t.corner_twin[o + i] != kNone && t.corner_face[t.corner_twin[o + i]] == g;
     if (same)
-      throw InputError(fmt::format("{}: faces {} and {} use the same vertices", name, f, g));
+      throw RepairableError(fmt::format("{}: faces {} and {} use the same vertices", name, f, g));
   }
 
   s.area.resize(nf);

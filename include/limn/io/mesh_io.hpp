@@ -40,6 +40,9 @@ struct ReadOptions {
   /// When set, receives the number of triangles dropped for repeating a vertex (STL after its
   /// welding, glTF, and glTF's weld); 0 for the other formats.
   size_t* dropped_degenerate = nullptr;
+  /// OBJ, PLY, OFF: keep faces that repeat a vertex (validate_soup instead of validate), for
+  /// repair_mesh to clean up. STL and glTF drop such triangles either way.
+  bool soup = false;
 };
 
 /// Reads a mesh. `format == automatic` picks by extension, then by the file's first bytes.
@@ -54,10 +57,11 @@ Mesh read_mesh_memory(std::string_view data, MeshFormat format, std::string_view
 /// current directory when empty) and fail with InputError naming the buffer when missing.
 Mesh read_mesh_memory(std::string_view data, const ReadOptions& options, std::string_view name);
 
-/// Format-specific parsers (what read_mesh dispatches to); all validate their result.
-Mesh read_obj(std::string_view data, std::string_view name);
-Mesh read_ply(std::string_view data, std::string_view name);
-Mesh read_off(std::string_view data, std::string_view name);
+/// Format-specific parsers (what read_mesh dispatches to); all validate their result, or with
+/// `soup` only validate_soup it (faces may repeat a vertex).
+Mesh read_obj(std::string_view data, std::string_view name, bool soup = false);
+Mesh read_ply(std::string_view data, std::string_view name, bool soup = false);
+Mesh read_off(std::string_view data, std::string_view name, bool soup = false);
 
 /// STL, ascii (`solid ... facet normal ... outer loop vertex x y z ...`) or binary (80-byte
 /// header, uint32 triangle count, 50 bytes per triangle), told apart by size first (a binary

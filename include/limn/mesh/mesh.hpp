@@ -23,6 +23,14 @@ class InputError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// Bad input that `repair_mesh` (limn/mesh/repair.hpp) fixes: a face that repeats a vertex, a
+/// non-manifold edge, faces that disagree on orientation, duplicate faces. The CLI suggests
+/// `limn repair` / `--repair` for these.
+class RepairableError : public InputError {
+ public:
+  using InputError::InputError;
+};
+
 /// Subdivision boundary rule, as OpenSubdiv's Sdc::Options::VtxBoundaryInterpolation.
 enum class BoundaryInterpolation : int8_t {
   unset = -1,
@@ -109,8 +117,20 @@ void face_normal(const Mesh& mesh, size_t f, float out[3]);
 /// Area-weighted vertex normals (3 floats per vertex; zero for unreferenced vertices). O(corners).
 std::vector<float> vertex_normals(const Mesh& mesh);
 
+/// Returned by repeated_vertex when a face lists each vertex once.
+inline constexpr uint32_t kNoRepeat = 0xFFFFFFFFu;
+
+/// A vertex that `face` lists more than once (the smallest such for faces over 16 corners), or
+/// kNoRepeat. O(n^2) for n <= 16 corners, where that beats sorting; O(n log n) above, sorting a
+/// copy in `scratch`, so a hostile 10^6-gon stays cheap.
+uint32_t repeated_vertex(std::span<const uint32_t> face, std::vector<uint32_t>& scratch);
+
 /// Checks the invariants above and throws InputError naming `what` (a file name or "mesh") and the
 /// first offending element. O(corners + V).
 void validate(const Mesh& mesh, const std::string& what = "mesh");
+
+/// The same checks except that faces may repeat a vertex: what `repair_mesh` accepts (a polygon
+/// soup). O(corners + V).
+void validate_soup(const Mesh& mesh, const std::string& what = "mesh");
 
 }  // namespace limn

@@ -21,6 +21,16 @@ namespace limn {
 /// points. O(points) expected time, ~12 bytes of scratch per point.
 std::vector<uint32_t> weld_map(std::span<const float> xyz, uint32_t* groups = nullptr);
 
+/// Groups the points of `xyz` that lie within `tolerance` (model units, Euclidean) of another
+/// point of the group, transitively: two points 0.6 x tolerance apart and a third 0.6 x
+/// tolerance beyond the second form one group. Groups are numbered in order of their first
+/// point, as weld_map's; tolerance <= 0, or below 1e-15 x the points' extent, is weld_map.
+/// Precondition: finite coordinates, fewer than
+/// 2^32 points. O(points) expected for surfaces sampled coarser than the tolerance; ~40 bytes of
+/// scratch per distinct point.
+std::vector<uint32_t> weld_map_within(std::span<const float> xyz, double tolerance,
+                                      uint32_t* groups = nullptr);
+
 /// Merges vertices with bit-equal positions (as weld_map) into one vertex each, numbered in order
 /// of their first original vertex, which also gives the merged vertex its position and colour.
 /// UVs and normals become per-corner indices into tables of their distinct (bit-equal) values in
