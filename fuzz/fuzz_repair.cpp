@@ -18,7 +18,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     return 0;
   }
   const limn::Mesh m = limn::repair_mesh(soup);  // must not throw
-  limn::validate(m);                               // throws (and so fails) when broken
+  limn::validate(m);                             // throws (and so fails) when broken
   const limn::Topology t = limn::build_topology(m);
   const limn::MeshStats s = limn::analyze(m, t);
   if (s.non_manifold_edges || s.non_manifold_vertices || s.inconsistent_edges ||

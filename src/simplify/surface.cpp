@@ -35,9 +35,9 @@ VsaSurface prepare_surface(const Mesh& mesh, std::string_view name) {
           t.edge_faces[e]));
     }
     if (tw != kNone && fv[tw] == fv[c])
-      throw RepairableError(fmt::format("{}: faces {} and {} disagree on orientation across edge {}-{}",
-                                   name, t.corner_face[c], t.corner_face[tw], fv[c],
-                                   fv[t.corner_next[c]]));
+      throw RepairableError(
+          fmt::format("{}: faces {} and {} disagree on orientation across edge {}-{}", name,
+                      t.corner_face[c], t.corner_face[tw], fv[c], fv[t.corner_next[c]]));
   }
 
   // Two faces over one vertex set would come out as duplicate output faces. In an oriented,
