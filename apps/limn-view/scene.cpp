@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <future>
 #include <stdexcept>
 
 #include "limn/io/mesh_io.hpp"
@@ -65,7 +66,25 @@ Scene::Scene(Mesh cage, std::string name) : cage_(std::move(cage)), name_(std::m
   options_.subdiv = subdiv_options(cage_);
 }
 
-Scene::~Scene() = default;
+Scene::~Scene() {
+  if (preparing_.valid()) preparing_.wait();
+}
+
+void Scene::prepare_paint_in_background() {
+  if (preparing_.valid() || texture_) return;
+  preparing_ = std::async(std::launch::async, [this] { build_paint(); });
+}
+
+void Scene::join_preparation() {
+  if (preparing_.valid()) preparing_.get();  // rethrows what the thread threw
+}
+
+void Scene::warm_up_paint() {
+  if (!preparing_.valid() || stroking_) return;
+  if (preparing_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
+  join_preparation();
+  sync_gpu_texture();
+}
 
 void Scene::release_gl() {
   cage_drawer_.reset();
@@ -199,6 +218,11 @@ FrameStats Scene::draw(Display display, const Camera& camera, const SurfaceSetti
 }
 
 const Mesh& Scene::dense() {
+  join_preparation();
+  return dense_mesh();
+}
+
+const Mesh& Scene::dense_mesh() {
   if (dense_) return *dense_;
   if (!is_cage()) {
     dense_ = cage_;
@@ -217,52 +241,84 @@ const Mesh& Scene::dense() {
   return *dense_;
 }
 
-void Scene::ensure_paint() {
-  if (texture_) return;
-  surface_ = std::make_unique<PaintSurface>(dense());
+void Scene::build_paint() {
+  surface_ = std::make_unique<PaintSurface>(dense_mesh());
   texture_ = std::make_unique<OctreeTexture>(
       OctreeTexture::create(*surface_, pack_rgba8(214, 214, 220, 255)));
   painter_ = std::make_unique<StrokePainter>(*texture_, *surface_, &history_);
+}
+
+void Scene::ensure_paint() {
+  join_preparation();
+  if (texture_) return;
+  build_paint();
   gpu_dirty_ = true;
 }
 
 void Scene::sync_gpu_texture() {
   ensure_paint();
+  if (gpu_texture_ && !gpu_dirty_) return;
+  const auto t0 = std::chrono::steady_clock::now();
   if (!gpu_texture_) {
     gpu_texture_ = std::make_unique<GpuOctreeTexture>(*texture_);
-  } else if (gpu_dirty_) {
+  } else {
     gpu_texture_->update(*texture_);
   }
   gpu_dirty_ = false;
+  stroke_times_.upload_ms += ms_since(t0);
+  ++stroke_times_.uploads;
+  stroke_times_.upload_words += gpu_texture_->last_upload_words();
 }
 
-void Scene::begin_stroke(const Brush& brush, const Camera& camera) {
+void Scene::begin_stroke(const Brush& brush, const Camera& camera, bool replayable) {
   ensure_paint();
   if (stroking_) end_stroke();
+  stroke_times_ = {};
+  stroke_points_.clear();
+  before_stroke_.reset();
+  if (replayable) before_stroke_ = *texture_;
+  stroke_brush_ = brush;
   PaintCamera pc;
   std::copy(camera.eye, camera.eye + 3, pc.eye);
   std::copy(camera.target, camera.target + 3, pc.target);
   std::copy(camera.up, camera.up + 3, pc.up);
   pc.fovy_deg = camera.fovy_deg, pc.width = camera.width, pc.height = camera.height;
+  stroke_camera_ = pc;
   painter_->begin(brush, &pc);
   stroking_ = true;
-  last_point_.clear();
 }
 
-bool Scene::stroke_to(double x, double y) {
+void Scene::stroke_to(double x, double y) {
   if (!stroking_) throw std::logic_error("stroke_to outside a stroke");
-  bool hit = true;
-  // Each new segment starts with a dab at the previous point: within a stroke a texel keeps the
-  // strongest weight any dab gave it, so that repeated dab changes nothing.
-  if (last_point_.empty()) {
-    hit = painter_->dab_screen(x, y);
-  } else {
-    const double xy[4] = {last_point_[0], last_point_[1], x, y};
-    painter_->stroke_screen(xy);
-  }
-  last_point_ = {x, y};
+  const auto t0 = std::chrono::steady_clock::now();
+  // The drag's points extend one polyline: its dabs are those of the whole stroke painted at
+  // once, none repeated where one mouse move ends and the next begins.
+  painter_->extend_screen(x, y);
+  stroke_points_.insert(stroke_points_.end(), {x, y});
   gpu_dirty_ = true;
-  return hit;
+  stroke_times_.paint_ms += ms_since(t0);
+}
+
+StrokeStats Scene::replay_stroke() const {
+  if (!before_stroke_ || stroke_points_.empty()) return {};
+  // With an undo record, as the viewer's own painter keeps one: the same work asked of the
+  // library. Caches are emptied first: the viewer's stroke began after a frame had filled them
+  // with other data, and a replay right after the stroke would find its data still there.
+  OctreeTexture copy = *before_stroke_;
+  {
+    std::vector<uint8_t> flush(size_t(64) << 20);
+    for (size_t i = 0; i < flush.size(); i += 64) flush[i] = uint8_t(i);
+    volatile uint8_t sink = flush[flush.size() / 2];
+    (void)sink;
+  }
+  PaintHistory history;
+  StrokePainter painter(copy, *surface_, &history);
+  painter.begin(stroke_brush_, &stroke_camera_);
+  if (stroke_points_.size() == 2)
+    painter.dab_screen(stroke_points_[0], stroke_points_[1]);
+  else
+    painter.stroke_screen(stroke_points_);
+  return painter.end();
 }
 
 StrokeStats Scene::end_stroke() {
@@ -273,12 +329,14 @@ StrokeStats Scene::end_stroke() {
 }
 
 bool Scene::undo() {
+  join_preparation();
   if (!texture_ || stroking_ || !history_.undo(*texture_)) return false;
   gpu_dirty_ = true;
   return true;
 }
 
 bool Scene::redo() {
+  join_preparation();
   if (!texture_ || stroking_ || !history_.redo(*texture_)) return false;
   gpu_dirty_ = true;
   return true;

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <filesystem>
+#include <future>
 #include <memory>
 #include <optional>
 #include <string>
@@ -41,11 +42,26 @@ struct FrameStats {
   bool patches = false;  ///< the limit surface was drawn (the patch counts apply)
 };
 
+/// Where a stroke's time went in the viewer (since begin_stroke).
+struct StrokeTimes {
+  double paint_ms = 0;   ///< in the painter: picking and dabs (the library's work)
+  double upload_ms = 0;  ///< sending the texture's changes to the GPU
+  size_t uploads = 0, upload_words = 0;
+};
+
 class Scene {
  public:
   /// Takes the cage (or mesh) and its name for messages. Cheap: nothing is built yet.
   Scene(Mesh cage, std::string name);
   ~Scene();
+
+  /// Builds what painting needs (the dense mesh, its ray-cast surface, a fresh texture) on a
+  /// thread of its own, so the first stroke does not wait for it; everything that reads those
+  /// waits for the thread first. Call once, before anything else uses the scene.
+  void prepare_paint_in_background();
+  /// Between frames: once the background work is done, sends the texture to the GPU, so the
+  /// first stroke's frame does not pay for it either. Cheap when there is nothing to do.
+  void warm_up_paint();
 
   const Mesh& cage() const { return cage_; }
   const std::string& name() const { return name_; }
@@ -66,11 +82,18 @@ class Scene {
   void release_gl();
 
   // Paint (on the dense mesh; screen strokes through a camera, radius in pixels).
-  void begin_stroke(const Brush& brush, const Camera& camera);
-  /// Paints from the last point (if any) to (x, y), window pixels. False when nothing was hit.
-  bool stroke_to(double x, double y);
+  /// `replayable`: keeps a copy of the texture as it was, for replay_stroke.
+  void begin_stroke(const Brush& brush, const Camera& camera, bool replayable = false);
+  /// Extends the stroke to (x, y), window pixels (StrokePainter::extend_screen).
+  void stroke_to(double x, double y);
   StrokeStats end_stroke();
   bool stroking() const { return stroking_; }
+  /// Where the current (or last) stroke's time went.
+  const StrokeTimes& stroke_times() const { return stroke_times_; }
+  /// The last stroke (begun replayable) painted again by the library alone, in one call over all
+  /// its points (with an undo record, as the viewer keeps), on a copy of the texture as it was
+  /// before it: what the same dabs cost without the viewer. The scene's texture is not touched.
+  StrokeStats replay_stroke() const;
   bool undo();
   bool redo();
   size_t undo_count() const { return history_.undo_count(); }
@@ -82,7 +105,9 @@ class Scene {
   const Mesh& dense();
   /// Words in the texture's pool (0 before any painting) and words sent to the GPU by its last
   /// upload or update (0 before the first painted draw).
-  size_t texture_words() const { return texture_ ? texture_->words().size() : 0; }
+  size_t texture_words() const {
+    return !preparing_.valid() && texture_ ? texture_->words().size() : 0;
+  }
   size_t texture_upload_words() const {
     return gpu_texture_ ? gpu_texture_->last_upload_words() : 0;
   }
@@ -95,6 +120,9 @@ class Scene {
   void export_simplified(const std::filesystem::path& path) const;
 
  private:
+  void join_preparation();
+  const Mesh& dense_mesh();  // dense() without waiting (the preparation thread's own)
+  void build_paint();        // the dense mesh, its surface, a texture and the painter
   void ensure_paint();
   void sync_gpu_texture();
   void ensure_hierarchy(int max_depth);
@@ -137,7 +165,12 @@ class Scene {
   std::unique_ptr<GpuOctreeTexture> gpu_texture_;
   std::unique_ptr<MeshDrawer> painted_drawer_;  // scans: the mesh itself, smooth shaded
   bool stroking_ = false, gpu_dirty_ = true;
-  std::vector<double> last_point_;
+  std::future<void> preparing_;  // valid while the background preparation may be running
+  StrokeTimes stroke_times_;
+  std::optional<OctreeTexture> before_stroke_;  // replayable strokes: the texture before
+  Brush stroke_brush_;
+  PaintCamera stroke_camera_;
+  std::vector<double> stroke_points_;
 
   // Simplify.
   std::optional<VsaResult> vsa_;

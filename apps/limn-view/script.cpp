@@ -83,6 +83,9 @@ void parse_stroke(Action& a, const json& v) {
       b.depth = integer(a, value, "depth", 1, octree::kMaxDepth);
     } else if (key == "blend") {
       b.blend = parse_blend(text(a, value, "blend"), a.where);
+    } else if (key == "live") {
+      if (!value.is_boolean()) fail(a, "'live' must be true or false");
+      a.live = value.get<bool>();
     } else {
       fail(a, fmt::format("unknown stroke key '{}'", key));
     }

@@ -12,7 +12,10 @@
 //   {"filtered": bool}                 (painted colour filtered, or the nearest texel)
 //   {"stroke": {"points": [[x, y], ...], "radius": px, "color": [r, g, b(, a)], "opacity": o,
 //               "hardness": h, "blend": "mix" | "add" | "multiply" | "erase", "depth": d,
-//               "spacing": s}}       (window pixels, y down; only "points" is required)
+//               "spacing": s, "live": bool}}   (window pixels, y down; only "points" is required;
+//               live: one point per frame, as a mouse drag delivers them, with the stroke's time
+//               split into painting, texture uploads and frames and compared with the library
+//               painting the same points alone, on one line of stderr)
 //   {"undo": true}  {"redo": true}  {"save_texture": "a.lot"}  {"load_texture": "a.lot"}
 //   {"simplify": {"proxies": K}}  {"export": "out.obj"}  {"screenshot": "out.png"}
 //   {"frames": N}                     (draw N frames before the next action)
@@ -78,6 +81,7 @@ struct Action {
   SurfaceChange surface;
   std::vector<double> points;  ///< stroke: x, y pairs in window pixels
   Brush brush;                 ///< stroke: radius in pixels
+  bool live = false;           ///< stroke: one point per frame
   size_t count = 0;            ///< frames, simplify proxies
   std::filesystem::path path;  ///< save/load texture, export, screenshot
   std::string where;           ///< "FILE: action N" for messages

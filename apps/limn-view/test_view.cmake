@@ -41,6 +41,14 @@ if(MODE STREQUAL "script")
   if(NOT rc EQUAL 0)
     message(FATAL_ERROR "limn-view --script ${SCRIPT}: exit ${rc}")
   endif()
+  # The live stroke (one point a frame) reports where its time went and the library's cost for
+  # the same points, which must be the same dabs.
+  if(NOT log MATCHES "stroke [0-9]+ \\(live, 4 points, one a frame\\): ([0-9]+) dabs in [0-9.]+ ms: painting [0-9.]+ ms, texture uploads [0-9.]+ ms \\([0-9]+, [0-9]+ words\\), frames [0-9.]+ ms; the library alone: ([0-9]+) dabs in [0-9.]+ ms; viewer/library [0-9.]+x")
+    message(FATAL_ERROR "no report line for the live stroke")
+  endif()
+  if(CMAKE_MATCH_1 LESS 4 OR NOT CMAKE_MATCH_1 EQUAL CMAKE_MATCH_2)
+    message(FATAL_ERROR "live stroke: ${CMAKE_MATCH_1} dabs in the viewer, ${CMAKE_MATCH_2} alone")
+  endif()
   # Framing, from the lines the screenshots log: the cage lies wholly in the view area (right of
   # the panel while it shows) and spans most of it, with the panel shown and hidden.
   foreach(shot framed framed-full)

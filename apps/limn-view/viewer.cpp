@@ -109,6 +109,10 @@ class Viewer {
 
   // Scripted mode.
   size_t next_action_ = 0, wait_frames_ = 0, frames_left_ = 0;
+  const Action* live_ = nullptr;  // the live stroke being fed, one point per frame
+  size_t live_next_ = 0, strokes_ = 0;
+  std::chrono::steady_clock::time_point live_t0_;
+  void end_live_stroke();
   bool pending_shot_ = false;
   std::filesystem::path shot_path_;
 };
@@ -155,6 +159,8 @@ Viewer::Viewer(Scene& scene, const ViewerOptions& o) : scene_(scene), o_(o), ui_
   brush_.color[0] = 0.9f, brush_.color[1] = 0.35f, brush_.color[2] = 0.1f, brush_.color[3] = 1;
   brush_.hardness = 0.6f;
   frames_left_ = o.frames;
+  // Painting's one-time work runs while the user looks at the model, not in the first stroke.
+  scene_.prepare_paint_in_background();
 }
 
 Viewer::~Viewer() {
@@ -231,10 +237,18 @@ void Viewer::apply(const Action& a) {
       break;
     case K::stroke: {
       // Script points are window pixels, as the mouse's are.
-      scene_.begin_stroke(a.brush, orbit_.camera());
+      if (a.live) {
+        scene_.begin_stroke(a.brush, orbit_.camera(), true);
+        live_ = &a, live_next_ = 0;
+        live_t0_ = std::chrono::steady_clock::now();
+        display_ = Display::painted;
+        break;
+      }
+      scene_.begin_stroke(a.brush, orbit_.camera(), true);
+      live_ = &a, live_t0_ = std::chrono::steady_clock::now();
       for (size_t i = 0; i + 1 < a.points.size(); i += 2)
         scene_.stroke_to(a.points[i] - view_x_, a.points[i + 1]);
-      last_stroke_ = scene_.end_stroke();
+      end_live_stroke();
       if (display_ != Display::painted) display_ = Display::painted;
       break;
     }
@@ -268,7 +282,36 @@ void Viewer::apply(const Action& a) {
   }
 }
 
+// Ends a scripted stroke (live_) and reports where its time went beside the library's.
+void Viewer::end_live_stroke() {
+  last_stroke_ = scene_.end_stroke();
+  const double wall =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - live_t0_)
+          .count();
+  const StrokeTimes& t = scene_.stroke_times();
+  const StrokeStats lib = scene_.replay_stroke();
+  const double viewer = t.paint_ms + t.upload_ms;
+  std::fprintf(stderr,
+               "limn-view: stroke %zu (%s, %zu points%s): %zu dabs in %.1f ms: "
+               "painting %.2f ms, texture uploads %.2f ms (%zu, %zu words), frames %.1f ms; "
+               "the library alone: %zu dabs in %.2f ms; viewer/library %.2fx\n",
+               ++strokes_, live_->live ? "live" : "scripted", live_->points.size() / 2,
+               live_->live ? ", one a frame" : " at once", last_stroke_.dabs, wall, t.paint_ms,
+               t.upload_ms, t.uploads, t.upload_words, wall - viewer, lib.dabs, lib.ms,
+               lib.ms > 0 ? viewer / lib.ms : 0.0);
+  live_ = nullptr;
+}
+
 bool Viewer::script_step() {
+  if (live_) {  // one point a frame; the frame after the last ends the stroke
+    if (live_next_ + 1 < live_->points.size()) {
+      scene_.stroke_to(live_->points[live_next_] - view_x_, live_->points[live_next_ + 1]);
+      live_next_ += 2;
+    } else {
+      end_live_stroke();
+    }
+    return true;
+  }
   if (wait_frames_ > 0) {
     --wait_frames_;
     return true;
@@ -539,6 +582,7 @@ void Viewer::frame() {
   ImGui::NewFrame();
   if (ui_) panel();
   update_view_area();
+  if (!scene_.stroking()) guard([&] { scene_.warm_up_paint(); });
   if (!o_.scripted) {
     guard([&] { mouse(); });
     guard([&] { keys(); });
@@ -569,6 +613,9 @@ void Viewer::frame() {
     screenshot(shot_path_);
   }
   glfwSwapBuffers(window_);
+  // A live stroke's frames are timed apart from its painting: a software driver (llvmpipe)
+  // would otherwise still be drawing on the same cores while the next dabs are painted.
+  if (live_) glFinish();
 
   const auto now = std::chrono::steady_clock::now();
   frame_ms_ = std::chrono::duration<double, std::milli>(now - last_frame_).count();

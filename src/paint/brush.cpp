@@ -191,6 +191,46 @@ void check_brush(const Brush& b, const char* what) {
   if (int(b.blend) > int(BlendMode::erase)) bad("blend", "is not a blend mode");
 }
 
+namespace {
+
+// A polyline walked point by point, calling f(point) every `step` of arc length from its first
+// point (which gets the first call). Dab k sits at arc length k * step, computed from k (not
+// accumulated), so no rounding drift drops or adds the last dab, and feeding the points one at a
+// time gives the same dabs as feeding them all at once.
+struct PolylineWalk {
+  double step = 1;
+  bool started = false;
+  double last[3] = {0, 0, 0};
+  double start = 0;  // arc length at the current segment's start
+  uint64_t next = 1;
+
+  template <class F>
+  void to(const double* b, int dim, F&& f) {
+    if (!started) {
+      started = true;
+      std::copy(b, b + dim, last);
+      f(last);
+      return;
+    }
+    double l2 = 0;
+    for (int k = 0; k < dim; ++k) l2 += (b[k] - last[k]) * (b[k] - last[k]);
+    const double len = std::sqrt(l2);
+    if ((start + len) / step - double(next) > 1e7)
+      throw InputError("stroke: more than 10 million dabs (spacing too small for its length)");
+    double p[3];
+    while (double(next) * step <= start + len + 1e-9 * step) {
+      const double u = len > 0 ? std::clamp((double(next) * step - start) / len, 0.0, 1.0) : 1.0;
+      for (int k = 0; k < dim; ++k) p[k] = last[k] + (b[k] - last[k]) * u;
+      f(p);
+      ++next;
+    }
+    start += len;
+    std::copy(b, b + dim, last);
+  }
+};
+
+}  // namespace
+
 // The per-stroke state: the brush, the eye, and per texel the colour before the stroke and the
 // strongest weight any dab of the stroke gave it.
 struct StrokePainter::State : LeafPainter {
@@ -211,6 +251,7 @@ struct StrokePainter::State : LeafPainter {
   double cx = 0, cy = 0;
   float r_world = 0;
   std::vector<uint32_t> tris;
+  PolylineWalk walk;  // extend_screen's polyline so far
 
   // The brush's weight at surface point q (normal nq) were nothing in the way, and the
   // occlusion segment toward the eye that decides whether it is (origin o, direction dir,
@@ -490,7 +531,6 @@ namespace {
 template <class T, class F>
 void along(std::span<const T> pts, int dim, double step, F&& f) {
   const size_t n = pts.size() / size_t(dim);
-  if (n == 0) return;
   for (T v : pts)
     if (!std::isfinite(double(v))) throw InputError("stroke: a point is not finite");
   double total = 0;
@@ -505,27 +545,12 @@ void along(std::span<const T> pts, int dim, double step, F&& f) {
   }
   if (total / step + double(n) > 1e7)
     throw InputError("stroke: more than 10 million dabs (spacing too small for its length)");
-  // Dab k sits at arc length k * step, computed from k (not accumulated), so no rounding drift
-  // drops or adds the last dab.
+  PolylineWalk walk;
+  walk.step = step;
   double p[3];
-  for (int k = 0; k < dim; ++k) p[k] = double(pts[size_t(k)]);
-  f(p);
-  uint64_t next = 1;
-  double start = 0;  // arc length at the current segment's start
-  for (size_t i = 1; i < n; ++i) {
-    const T* a = &pts[(i - 1) * size_t(dim)];
-    const T* b = &pts[i * size_t(dim)];
-    double l2 = 0;
-    for (int k = 0; k < dim; ++k)
-      l2 += (double(b[k]) - double(a[k])) * (double(b[k]) - double(a[k]));
-    const double len = std::sqrt(l2);
-    while (double(next) * step <= start + len + 1e-9 * step) {
-      const double u = len > 0 ? std::clamp((double(next) * step - start) / len, 0.0, 1.0) : 1.0;
-      for (int k = 0; k < dim; ++k) p[k] = double(a[k]) + (double(b[k]) - double(a[k])) * u;
-      f(p);
-      ++next;
-    }
-    start += len;
+  for (size_t i = 0; i < n; ++i) {
+    for (int k = 0; k < dim; ++k) p[k] = double(pts[i * size_t(dim) + size_t(k)]);
+    walk.to(p, dim, f);
   }
 }
 
@@ -543,6 +568,15 @@ void StrokePainter::stroke_screen(std::span<const double> xy) {
   if (!st_) throw std::logic_error("StrokePainter::stroke_screen outside a stroke");
   along(xy, 2, double(st_->brush.spacing) * st_->brush.radius,
         [&](const double* p) { dab_screen(p[0], p[1]); });
+}
+
+void StrokePainter::extend_screen(double px, double py) {
+  if (!st_) throw std::logic_error("StrokePainter::extend_screen outside a stroke");
+  if (!std::isfinite(px) || !std::isfinite(py)) throw InputError("stroke: a point is not finite");
+  PolylineWalk& w = st_->walk;
+  w.step = double(st_->brush.spacing) * st_->brush.radius;
+  const double p[2] = {px, py};
+  w.to(p, 2, [&](const double* q) { dab_screen(q[0], q[1]); });
 }
 
 StrokeStats StrokePainter::end() {

@@ -61,8 +61,11 @@ OctreeTexture::Words::Words() : data_(pool_allocate(2)), size_(2), capacity_(2) 
   data_[0] = data_[1] = 0;
 }
 
+// A copy keeps the original's room, so it grows (and costs) as the original would from here.
 OctreeTexture::Words::Words(const Words& o)
-    : data_(o.size_ ? pool_allocate(o.size_) : nullptr), size_(o.size_), capacity_(o.size_) {
+    : data_(o.capacity_ ? pool_allocate(o.capacity_) : nullptr),
+      size_(o.size_),
+      capacity_(o.capacity_) {
   std::copy_n(o.data_, o.size_, data_);
 }
 

@@ -134,6 +134,28 @@ TEST(PaintStrokeReuse, SameBytesAsWithoutReuseStrokeByStroke) {
   EXPECT_GT(changed, 20000u);
 }
 
+TEST(PaintStrokeReuse, ScreenPointsFedOneAtATimeGiveTheSameDabsAndBytes) {
+  // extend_screen, as the viewer feeds a drag, against stroke_screen over all the points.
+  const Mesh m = scene();
+  const PaintSurface s(m);
+  const PaintCamera cam = camera();
+  for (const Stroke& st : strokes()) {
+    if (st.xy.empty()) continue;
+    OctreeTexture all = OctreeTexture::create(s), fed = OctreeTexture::create(s);
+    StrokePainter a(all, s), b(fed, s);
+    a.begin(st.brush, &cam);
+    a.stroke_screen(st.xy);
+    const StrokeStats sa = a.end();
+    b.begin(st.brush, &cam);
+    for (size_t i = 0; i + 1 < st.xy.size(); i += 2) b.extend_screen(st.xy[i], st.xy[i + 1]);
+    const StrokeStats sb = b.end();
+    EXPECT_GT(sa.dabs, st.xy.size() / 2);  // more dabs than points: the spacing matters
+    EXPECT_EQ(sa.dabs, sb.dabs);
+    EXPECT_EQ(sa.samples_changed, sb.samples_changed);
+    ASSERT_EQ(words(all), words(fed));
+  }
+}
+
 TEST(PaintStrokeReuse, RepaintingOverEarlierPaintGivesTheSameBytes) {
   // Every stroke twice over (the second time over the stroke's own paint, all bricks built), in
   // reverse order the second time.

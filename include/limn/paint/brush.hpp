@@ -79,6 +79,11 @@ class StrokePainter {
   void stroke_world(std::span<const float> xyz);
   /// The same along pixel points (xy), spacing in pixels.
   void stroke_screen(std::span<const double> xy);
+  /// Extends the stroke's pixel polyline to (px, py), as a mouse drag delivers it: the first call
+  /// dabs at its point, later ones every `spacing * radius` of arc length along the whole
+  /// polyline, so the points fed one at a time get the same dabs as stroke_screen over all of
+  /// them (no dab repeated at a segment's start). Throws InputError for a non-finite point.
+  void extend_screen(double px, double py);
   /// Ends the stroke (and its undo record). Returns its counts.
   StrokeStats end();
   /// Whether the dabs of a stroke reuse what earlier dabs of it found that depends only on the
