@@ -68,13 +68,25 @@ void GpuOctreeTexture::update(const OctreeTexture& t) {
     // rewrites go as a few transfers), plus everything appended after `held`.
     constexpr size_t kGap = 256;
     size_t sent = 0;
+    // The shadow follows what is sent, not a copy of the whole pool per update.
+    m.shadow.resize(n);
     auto send = [&](size_t lo, size_t hi) {
       glNamedBufferSubData(m.pool.get(), GLintptr(lo * 4), GLsizeiptr((hi - lo) * 4),
                            words.data() + lo);
+      std::copy(words.begin() + ptrdiff_t(lo), words.begin() + ptrdiff_t(hi),
+                m.shadow.begin() + ptrdiff_t(lo));
       sent += hi - lo;
     };
+    // Unchanged stretches are skipped a chunk at a time (memcmp runs at memory speed; a stroke
+    // changes a small part of a large pool).
+    constexpr size_t kChunk = 1024;
     size_t i = 0, tail = held;
     while (i < held) {
+      if (i % kChunk == 0 && i + kChunk <= held &&
+          std::memcmp(words.data() + i, m.shadow.data() + i, kChunk * 4) == 0) {
+        i += kChunk;
+        continue;
+      }
       if (words[i] == m.shadow[i]) {
         ++i;
         continue;
@@ -96,6 +108,8 @@ void GpuOctreeTexture::update(const OctreeTexture& t) {
     }
     if (n > held) send(tail, n);
     m.last_words = sent;
+    gl::check("GpuOctreeTexture::update");
+    return;
   }
   m.shadow.assign(words.begin(), words.end());
   gl::check("GpuOctreeTexture::update");
