@@ -1,8 +1,9 @@
 // Repair benchmark: limn's repair_mesh beside CGAL 5.5's polygon-soup repair on the same soups,
-// in one run. Soups are made from the shared `tri/` meshes three ways: shuffled (faces and
-// vertices renumbered, 30% of faces reversed), welded apart (every corner its own vertex, as STL
-// stores a mesh) and broken (a second copy touching the first at one vertex, 20 fins making
-// non-manifold edges, duplicate and degenerate faces, then shuffled).
+// in one run. Soups are made from the shared `tri/` meshes three ways (tests/unit/soups.hpp, as
+// the repair tests make them): shuffled (faces and vertices renumbered, faces rotated, 30%
+// reversed), welded apart (every corner its own vertex, as STL stores a mesh, faces shuffled)
+// and broken (a second copy touching the first at one vertex, 20 fins making non-manifold edges,
+// 20 duplicate and 20 degenerate faces, then shuffled).
 //   CGAL: repair_polygon_soup (merges equal points, drops invalid and duplicate polygons and
 //         isolated points) then orient_polygon_soup (orients, duplicates points at non-manifold
 //         edges and vertices): soup in, soup out.
@@ -20,7 +21,6 @@
 #include <algorithm>
 #include <cstring>
 #include <filesystem>
-#include <numeric>
 #include <random>
 #include <string>
 #include <vector>
@@ -28,6 +28,7 @@
 #include "clock.hpp"
 #include "limn/io/mesh_io.hpp"
 #include "limn/mesh/repair.hpp"
+#include "soups.hpp"
 
 namespace fs = std::filesystem;
 
@@ -38,82 +39,6 @@ using limn::bench::median;
 using limn::bench::now_ms;
 using Point = CGAL::Exact_predicates_inexact_constructions_kernel::Point_3;
 using Polygons = std::vector<std::vector<std::size_t>>;
-
-Mesh shuffled(const Mesh& m, std::mt19937& rng) {
-  std::vector<uint32_t> vperm(m.vertex_count()), forder(m.face_count());
-  std::iota(vperm.begin(), vperm.end(), 0u);
-  std::iota(forder.begin(), forder.end(), 0u);
-  std::shuffle(vperm.begin(), vperm.end(), rng);
-  std::shuffle(forder.begin(), forder.end(), rng);
-  Mesh out;
-  out.positions.resize(m.positions.size());
-  for (size_t v = 0; v < m.vertex_count(); ++v)
-    std::memcpy(&out.positions[3 * size_t(vperm[v])], &m.positions[3 * v], 3 * sizeof(float));
-  std::bernoulli_distribution flip(0.3);
-  std::vector<uint32_t> face;
-  for (const uint32_t f : forder) {
-    face.clear();
-    for (const uint32_t v : m.face(f)) face.push_back(vperm[v]);
-    if (flip(rng)) std::reverse(face.begin(), face.end());
-    out.add_face(face);
-  }
-  return out;
-}
-
-Mesh welded_apart(const Mesh& m) {
-  Mesh out;
-  std::vector<uint32_t> face;
-  for (size_t f = 0; f < m.face_count(); ++f) {
-    face.clear();
-    for (const uint32_t v : m.face(f)) {
-      const float* p = &m.positions[3 * size_t(v)];
-      face.push_back(out.add_vertex(p[0], p[1], p[2]));
-    }
-    out.add_face(face);
-  }
-  return out;
-}
-
-Mesh broken(const Mesh& clean, std::mt19937& rng) {
-  Mesh m = clean;
-  const uint32_t nv = static_cast<uint32_t>(clean.vertex_count());
-  const size_t nf = clean.face_count();
-  uint32_t lo = 0, hi = 0;
-  for (uint32_t v = 0; v < nv; ++v) {
-    if (clean.positions[3 * v] < clean.positions[3 * lo]) lo = v;
-    if (clean.positions[3 * v] > clean.positions[3 * hi]) hi = v;
-  }
-  for (uint32_t v = 0; v < nv; ++v) {
-    const uint32_t s = v == hi ? lo : v;
-    float p[3];
-    for (int k = 0; k < 3; ++k)
-      p[k] = clean.positions[3 * size_t(s) + k] +
-             (v == hi ? 0.0f : clean.positions[3 * lo + k] - clean.positions[3 * hi + k]);
-    m.add_vertex(p[0], p[1], p[2]);
-  }
-  std::vector<uint32_t> face;
-  for (size_t f = 0; f < nf; ++f) {
-    face.clear();
-    for (const uint32_t v : clean.face(f)) face.push_back(v + nv);
-    m.add_face(face);
-  }
-  std::uniform_int_distribution<size_t> pick(0, nf - 1);
-  for (int i = 0; i < 20; ++i) {  // fins
-    const auto fv = clean.face(pick(rng));
-    const float* a = &clean.positions[3 * size_t(fv[0])];
-    const float* b = &clean.positions[3 * size_t(fv[1])];
-    m.add_face(
-        {fv[0], fv[1],
-         m.add_vertex(0.5f * (a[0] + b[0]), 0.5f * (a[1] + b[1]) + 0.1f, 0.5f * (a[2] + b[2]))});
-  }
-  for (int i = 0; i < 20; ++i) m.add_face(clean.face(pick(rng)));  // duplicates
-  for (int i = 0; i < 20; ++i) {  // degenerate: a corner's exact copy
-    const auto fv = clean.face(pick(rng));
-    const float* a = &clean.positions[3 * size_t(fv[0])];
-    m.add_face({fv[0], fv[1], m.add_vertex(a[0], a[1], a[2])});
-  }
-  return shuffled(m, rng);
-}
 
 void to_soup(const Mesh& m, std::vector<Point>& points, Polygons& polygons) {
   points.clear();
@@ -155,9 +80,13 @@ int main(int argc, char** argv) {
     limn::RepairOptions exact;
     exact.weld_tolerance = 0;
     const Mesh clean = limn::repair_mesh(limn::read_mesh(models / name), exact);
-    const std::pair<const char*, Mesh> soups[] = {{"shuffled", shuffled(clean, rng)},
-                                                  {"apart", welded_apart(clean)},
-                                                  {"broken", broken(clean, rng)}};
+    std::vector<uint8_t> flipped;
+    double duplicate_area = 0;
+    const std::pair<const char*, Mesh> soups[] = {
+        {"shuffled", limn::test::shuffled(clean, rng, flipped, 0.3)},
+        {"apart", limn::test::welded_apart(clean, rng)},
+        {"broken", limn::test::shuffled(limn::test::broken(clean, rng, 20, 20, 20, duplicate_area),
+                                        rng, flipped, 0.3)}};
     for (const auto& [kind, soup] : soups) {
       std::vector<double> t_limn, t_tol, t_cgal;
       size_t limn_faces = 0, cgal_faces = 0;

@@ -28,19 +28,7 @@ void add_convert(CLI::App& app) {
   cmd->add_flag("--json", o->json, "Print one JSON object with counts and timings");
   cmd->callback([o] {
     Stopwatch sw;
-    WriteOptions w;
-    w.format = parse_format_option(o->to, "--to");
-    w.ascii = o->ascii;
-    const MeshFormat out_format =
-        w.format == MeshFormat::automatic ? format_from_path(o->out) : w.format;
-    if (out_format == MeshFormat::automatic)
-      throw InputError(
-          fmt::format("{}: cannot tell the output format from the extension (use "
-                      ".obj, .ply, .off, .stl or .glb, or --to)",
-                      o->out));
-    if (out_format == MeshFormat::gltf)
-      throw InputError(fmt::format(
-          "{}: writing .gltf is not supported (limn writes binary glTF: use .glb)", o->out));
+    const WriteOptions w = output_options(o->out, o->to, o->ascii);
     size_t dropped = 0;
     const Mesh mesh = read_input(o->in, o->from, o->weld, &dropped, "--from");
     const double t_read = sw.lap();

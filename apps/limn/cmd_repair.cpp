@@ -32,15 +32,7 @@ void add_repair(CLI::App& app) {
   cmd->add_flag("--json", o->json, "Print one JSON object with the counts and timings");
   cmd->callback([o] {
     Stopwatch sw;
-    WriteOptions w;
-    w.format = parse_format_option(o->to, "--to");
-    w.ascii = o->ascii;
-    const MeshFormat out_format =
-        w.format == MeshFormat::automatic ? format_from_path(o->out) : w.format;
-    if (out_format == MeshFormat::automatic || out_format == MeshFormat::gltf)
-      throw InputError(fmt::format(
-          "{}: cannot tell the output format (use .obj, .ply, .off, .stl or .glb, or --to)",
-          o->out));
+    const WriteOptions w = output_options(o->out, o->to, o->ascii);
     ReadOptions r;
     r.format = parse_format_option(o->from, "--from");
     r.soup = true;

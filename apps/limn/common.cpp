@@ -18,6 +18,22 @@ MeshFormat parse_format_option(const std::string& value, const char* option) {
   return f;
 }
 
+WriteOptions output_options(const std::string& out, const std::string& to, bool ascii) {
+  WriteOptions w;
+  w.format = parse_format_option(to, "--to");
+  w.ascii = ascii;
+  const MeshFormat f = w.format == MeshFormat::automatic ? format_from_path(out) : w.format;
+  if (f == MeshFormat::automatic)
+    throw InputError(
+        fmt::format("{}: cannot tell the output format from the extension (use "
+                    ".obj, .ply, .off, .stl or .glb, or --to)",
+                    out));
+  if (f == MeshFormat::gltf)
+    throw InputError(
+        fmt::format("{}: writing .gltf is not supported (limn writes binary glTF: use .glb)", out));
+  return w;
+}
+
 Mesh read_input(const std::string& path, const std::string& format, bool weld,
                 size_t* dropped_degenerate, const char* format_option) {
   ReadOptions r;

@@ -74,6 +74,10 @@ std::string repair_summary(const RepairReport& r);
 /// `--format` values accepted for input/output overrides.
 MeshFormat parse_format_option(const std::string& value, const char* option);
 
+/// The options to write OUT with: `to` (--to) or the extension gives the format, `ascii` PLY's
+/// encoding. InputError naming OUT when neither gives a format limn writes.
+WriteOptions output_options(const std::string& out, const std::string& to, bool ascii);
+
 /// "a,b,c,..." -> numbers; InputError "OPTION S: 'item' is not a number" for any other item.
 std::vector<float> parse_numbers(const std::string& s, const char* option);
 

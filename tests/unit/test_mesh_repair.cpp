@@ -31,6 +31,7 @@
 #include "limn/mesh/repair.hpp"
 #include "limn/mesh/shapes.hpp"
 #include "limn/mesh/weld.hpp"
+#include "soups.hpp"
 
 namespace limn {
 namespace {
@@ -40,12 +41,11 @@ using K = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Point = K::Point_3;
 using SurfaceMesh = CGAL::Surface_mesh<Point>;
 using Polygons = std::vector<std::vector<std::size_t>>;
-using Pos = std::array<float, 3>;
-
-Pos pos(const Mesh& m, uint32_t v) {
-  return {m.positions[3 * size_t(v)], m.positions[3 * size_t(v) + 1],
-          m.positions[3 * size_t(v) + 2]};
-}
+using test::broken;
+using test::Pos;
+using test::pos;
+using test::shuffled;
+using test::welded_apart;
 
 void to_soup(const Mesh& m, std::vector<Point>& points, Polygons& polygons) {
   points.clear();
@@ -121,54 +121,21 @@ void expect_clean(const Mesh& out) {
   EXPECT_EQ(std::set<std::vector<Pos>>(keys.begin(), keys.end()).size(), keys.size());
 }
 
-// A copy of `m` with faces shuffled, rotated and (where `flip` says) reversed, and vertices
-// renumbered at random.
-Mesh shuffled(const Mesh& m, std::mt19937& rng, std::vector<uint8_t>& flipped, double flip_rate) {
-  std::vector<uint32_t> vperm(m.vertex_count()), forder(m.face_count());
-  std::iota(vperm.begin(), vperm.end(), 0u);
-  std::iota(forder.begin(), forder.end(), 0u);
-  std::shuffle(vperm.begin(), vperm.end(), rng);
-  std::shuffle(forder.begin(), forder.end(), rng);
-  Mesh out;
-  out.positions.resize(m.positions.size());
-  for (size_t v = 0; v < m.vertex_count(); ++v)
-    for (int k = 0; k < 3; ++k) out.positions[3 * size_t(vperm[v]) + k] = m.positions[3 * v + k];
-  std::bernoulli_distribution coin(flip_rate);
-  flipped.assign(m.face_count(), 0);
-  std::vector<uint32_t> face;
-  for (const uint32_t f : forder) {
-    const auto fv = m.face(f);
-    face.clear();
-    for (const uint32_t v : fv) face.push_back(vperm[v]);
-    std::rotate(face.begin(), face.begin() + rng() % face.size(), face.end());
-    if (coin(rng)) std::reverse(face.begin(), face.end()), flipped[f] = 1;
-    out.add_face(face);
-  }
-  return out;
-}
-
-// Every corner its own vertex (a triangle soup as STL stores it), faces shuffled.
-Mesh welded_apart(const Mesh& m, std::mt19937& rng) {
-  std::vector<uint32_t> order(m.face_count());
-  std::iota(order.begin(), order.end(), 0u);
-  std::shuffle(order.begin(), order.end(), rng);
-  Mesh out;
-  std::vector<uint32_t> face;
-  for (const uint32_t f : order) {
-    face.clear();
-    for (const uint32_t v : m.face(f)) {
-      const Pos p = pos(m, v);
-      face.push_back(out.add_vertex(p[0], p[1], p[2]));
-    }
-    out.add_face(face);
-  }
-  return out;
-}
-
 const char* kSharedMeshes[] = {"spot.obj", "fandisk.obj", "blade.off", "ogre.obj"};
+
+RepairOptions exact_weld() {
+  RepairOptions o;
+  o.weld_tolerance = 0;
+  return o;
+}
 
 Mesh shared(const char* name) {
   return read_mesh(std::filesystem::path(LIMN_SHARED_MODELS) / "tri" / name);
+}
+
+// A shared mesh repaired once (equal positions welded only): what the broken versions break.
+Mesh clean_shared(const char* name) {
+  return repair_mesh(shared(name), exact_weld());
 }
 
 // ---- shared meshes ----
@@ -177,9 +144,8 @@ TEST(Repair, SharedMeshesShuffledAndFlippedComeBackOriented) {
   std::mt19937 rng(7);
   for (const char* name : kSharedMeshes) {
     SCOPED_TRACE(name);
-    RepairOptions exact;
-    exact.weld_tolerance = 0;
-    const Mesh clean = repair_mesh(shared(name), exact);
+    const RepairOptions exact = exact_weld();
+    const Mesh clean = clean_shared(name);
     std::vector<uint8_t> flipped;
     const Mesh soup = shuffled(clean, rng, flipped, 0.3);
     RepairReport r;
@@ -213,9 +179,8 @@ TEST(Repair, SharedMeshesWeldedApartComeBackConnected) {
   std::mt19937 rng(11);
   for (const char* name : kSharedMeshes) {
     SCOPED_TRACE(name);
-    RepairOptions exact;
-    exact.weld_tolerance = 0;
-    const Mesh clean = repair_mesh(shared(name), exact);
+    const RepairOptions exact = exact_weld();
+    const Mesh clean = clean_shared(name);
     const Mesh soup = welded_apart(clean, rng);
     RepairReport r;
     const Mesh out = repair_mesh(soup, exact, &r);
@@ -227,68 +192,12 @@ TEST(Repair, SharedMeshesWeldedApartComeBackConnected) {
   }
 }
 
-// Two copies touching at one vertex, fins on edges (3 faces per edge), duplicate and degenerate
-// faces, a few vertices moved by less than the tolerance.
-Mesh broken(const Mesh& clean, std::mt19937& rng, size_t fins, size_t duplicates, size_t degenerate,
-            double& duplicate_area) {
-  Mesh m = clean;
-  const size_t nv = clean.vertex_count(), nf = clean.face_count();
-  // The copy's largest-x vertex onto the original's smallest-x vertex.
-  uint32_t lo = 0, hi = 0;
-  for (uint32_t v = 0; v < nv; ++v) {
-    if (clean.positions[3 * v] < clean.positions[3 * lo]) lo = v;
-    if (clean.positions[3 * v] > clean.positions[3 * hi]) hi = v;
-  }
-  float t[3];
-  for (int k = 0; k < 3; ++k) t[k] = clean.positions[3 * lo + k] - clean.positions[3 * hi + k];
-  for (uint32_t v = 0; v < nv; ++v) {
-    const Pos p =
-        v == hi ? pos(clean, lo)
-                : Pos{pos(clean, v)[0] + t[0], pos(clean, v)[1] + t[1], pos(clean, v)[2] + t[2]};
-    m.add_vertex(p[0], p[1], p[2]);
-  }
-  std::vector<uint32_t> face;
-  for (size_t f = 0; f < nf; ++f) {
-    face.clear();
-    for (const uint32_t v : clean.face(f)) face.push_back(v + uint32_t(nv));
-    m.add_face(face);
-  }
-  std::uniform_int_distribution<size_t> pick(0, nf - 1);
-  std::set<std::pair<uint32_t, uint32_t>> used;
-  for (size_t i = 0; i < fins;) {
-    const auto fv = clean.face(pick(rng));
-    const uint32_t a = fv[0], b = fv[1];
-    if (!used.insert({std::min(a, b), std::max(a, b)}).second) continue;
-    const Pos pa = pos(clean, a), pb = pos(clean, b);
-    const uint32_t c = m.add_vertex(0.5f * (pa[0] + pb[0]), 0.5f * (pa[1] + pb[1]) + 0.3f,
-                                    0.5f * (pa[2] + pb[2]) + 0.2f);
-    m.add_face({a, b, c});
-    ++i;
-  }
-  duplicate_area = 0;
-  for (size_t i = 0; i < duplicates; ++i) {
-    const size_t f = pick(rng);
-    duplicate_area += face_area(clean, f);
-    const auto fv = clean.face(f);
-    face.assign(fv.begin(), fv.end());
-    if (i % 2) std::reverse(face.begin(), face.end());
-    m.add_face(face);
-  }
-  for (size_t i = 0; i < degenerate; ++i) {  // a triangle over an exact copy of one of its corners
-    const auto fv = clean.face(pick(rng));
-    const Pos p = pos(clean, fv[0]);
-    m.add_face({fv[0], fv[1], m.add_vertex(p[0], p[1], p[2])});
-  }
-  return m;
-}
-
 TEST(Repair, NonManifoldSharedMeshesBesideCgal) {
   std::mt19937 rng(5);
   for (const char* name : kSharedMeshes) {
     SCOPED_TRACE(name);
-    RepairOptions exact;
-    exact.weld_tolerance = 0;
-    const Mesh clean = repair_mesh(shared(name), exact);
+    const RepairOptions exact = exact_weld();
+    const Mesh clean = clean_shared(name);
     std::vector<uint8_t> flipped;
     double duplicate_area = 0;
     const Mesh soup = shuffled(broken(clean, rng, 12, 8, 6, duplicate_area), rng, flipped, 0.2);
