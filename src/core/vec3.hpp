@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstddef>
 #include <type_traits>
 
 namespace limn {
@@ -42,6 +43,23 @@ inline Vec3<T> cross(Vec3<T> a, Vec3<T> b) {
 template <class T>
 inline T length(Vec3<T> a) {
   return std::sqrt(dot(a, a));
+}
+
+/// Twice the vector area of the polygon `face` over xyz `positions` (Newell's method), in double
+/// and relative to its first corner, so large coordinates lose no precision to cancellation.
+template <class Index>
+inline void newell_double(const float* positions, const Index* face, size_t n, double out[3]) {
+  const float* o = positions + 3 * size_t(face[0]);
+  out[0] = out[1] = out[2] = 0;
+  for (size_t i = 1; i + 1 < n; ++i) {
+    const float* a = positions + 3 * size_t(face[i]);
+    const float* b = positions + 3 * size_t(face[i + 1]);
+    const double ax = double(a[0]) - o[0], ay = double(a[1]) - o[1], az = double(a[2]) - o[2];
+    const double bx = double(b[0]) - o[0], by = double(b[1]) - o[1], bz = double(b[2]) - o[2];
+    out[0] += ay * bz - az * by;
+    out[1] += az * bx - ax * bz;
+    out[2] += ax * by - ay * bx;
+  }
 }
 
 }  // namespace limn

@@ -19,6 +19,7 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "core/vec3.hpp"
 #include "limn/mesh/weld.hpp"
 
 namespace limn {
@@ -58,19 +59,10 @@ void unite(std::vector<uint32_t>& parent, uint32_t a, uint32_t b) {
   if (a != b) parent[std::max(a, b)] = std::min(a, b);
 }
 
-// Twice the vector area of a polygon (Newell), in double relative to its first vertex.
+// Twice the area of a polygon.
 double area2(const float* P, const uint32_t* v, size_t n) {
-  const float* o = P + 3 * size_t(v[0]);
-  double s[3] = {0, 0, 0};
-  for (size_t i = 1; i + 1 < n; ++i) {
-    const float* a = P + 3 * size_t(v[i]);
-    const float* b = P + 3 * size_t(v[i + 1]);
-    const double ax = double(a[0]) - o[0], ay = double(a[1]) - o[1], az = double(a[2]) - o[2];
-    const double bx = double(b[0]) - o[0], by = double(b[1]) - o[1], bz = double(b[2]) - o[2];
-    s[0] += ay * bz - az * by;
-    s[1] += az * bx - ax * bz;
-    s[2] += ax * by - ay * bx;
-  }
+  double s[3];
+  newell_double(P, v, n, s);
   return std::sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
 }
 

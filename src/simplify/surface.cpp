@@ -8,6 +8,7 @@
 #include <numeric>
 
 #include "core/parallel.hpp"
+#include "core/vec3.hpp"
 
 namespace limn {
 
@@ -61,19 +62,9 @@ VsaSurface prepare_surface(const Mesh& mesh, std::string_view name) {
   // parallel_range: a small mesh's faces in one go, without starting TBB's threads for them.
   parallel_range(nf, size_t(1) << 14, [&](size_t fb, size_t fe) {
     for (size_t f = fb; f < fe; ++f) {
-      // Newell's method in double, relative to the first corner.
       const auto v = mesh.face(f);
-      const float* o = P + 3 * size_t(v[0]);
-      double n[3] = {0, 0, 0};
-      for (size_t i = 1; i + 1 < v.size(); ++i) {
-        const float* a = P + 3 * size_t(v[i]);
-        const float* b = P + 3 * size_t(v[i + 1]);
-        const double ax = double(a[0]) - o[0], ay = double(a[1]) - o[1], az = double(a[2]) - o[2];
-        const double bx = double(b[0]) - o[0], by = double(b[1]) - o[1], bz = double(b[2]) - o[2];
-        n[0] += ay * bz - az * by;
-        n[1] += az * bx - ax * bz;
-        n[2] += ax * by - ay * bx;
-      }
+      double n[3];
+      newell_double(P, v.data(), v.size(), n);
       double len = 0;
       for (int k = 0; k < 3; ++k) {
         s.vec[3 * f + k] = 0.5 * n[k];
