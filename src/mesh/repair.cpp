@@ -129,7 +129,11 @@ bool orient_and_split(Faces& F, std::vector<uint32_t>& source, const float* P,
     const uint64_t a = F.verts[c], b = F.verts[next[c]];
     keys[c] = {std::min(a, b) << 32 | std::max(a, b), c};
   }
-  tbb::parallel_sort(keys.begin(), keys.end());
+  // Small meshes sort on this thread: TBB's pool costs milliseconds to start in a fresh process.
+  if (nc < (size_t(1) << 17))
+    std::sort(keys.begin(), keys.end());
+  else
+    tbb::parallel_sort(keys.begin(), keys.end());
   std::vector<uint32_t> twin(nc, kNo);
   size_t cut = 0;
   for (size_t i = 0; i < nc;) {
