@@ -527,9 +527,14 @@ void Viewer::panel() {
         report(e);
       }
     }
-    if (last_stroke_.dabs)
-      ImGui::Text("last stroke: %zu dabs (%zu missed), %.1f ms", last_stroke_.dabs,
-                  last_stroke_.dabs_missed, last_stroke_.ms);
+    if (last_stroke_.dabs) {
+      // The painting itself, apart from the drag's length and the frames drawn meanwhile.
+      const StrokeTimes& t = scene_.stroke_times();
+      ImGui::Text("last stroke: %zu dabs (%zu missed)", last_stroke_.dabs,
+                  last_stroke_.dabs_missed);
+      ImGui::Text("  painting %.1f ms (%.2f a dab), uploads %.1f ms", t.paint_ms,
+                  t.paint_ms / double(last_stroke_.dabs), t.upload_ms);
+    }
   }
 
   if (ImGui::CollapsingHeader("Simplify",
