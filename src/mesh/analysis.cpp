@@ -4,23 +4,13 @@
 #include <numeric>
 
 #include "limn/mesh/topology.hpp"
+#include "union_find.hpp"
 
 namespace limn {
 
 namespace {
 
-struct UnionFind {
-  std::vector<uint32_t> parent;
-  explicit UnionFind(size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
-  uint32_t find(uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void unite(uint32_t a, uint32_t b) {
-    a = find(a), b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  }
-};
+using detail::UnionFind;
 
 std::vector<std::pair<uint32_t, size_t>> to_pairs(const std::map<uint32_t, size_t>& m) {
   return {m.begin(), m.end()};

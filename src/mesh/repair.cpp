@@ -21,6 +21,7 @@
 
 #include "core/vec3.hpp"
 #include "limn/mesh/weld.hpp"
+#include "union_find.hpp"
 
 namespace limn {
 
@@ -47,16 +48,6 @@ void add_face(Faces& F, uint32_t face, const Corner* loop, size_t n) {
   }
   F.offsets.push_back(static_cast<uint32_t>(F.verts.size()));
   F.src_face.push_back(face);
-}
-
-uint32_t find_root(std::vector<uint32_t>& parent, uint32_t i) {
-  while (parent[i] != i) i = parent[i] = parent[parent[i]];
-  return i;
-}
-
-void unite(std::vector<uint32_t>& parent, uint32_t a, uint32_t b) {
-  a = find_root(parent, a), b = find_root(parent, b);
-  if (a != b) parent[std::max(a, b)] = std::min(a, b);
 }
 
 // Twice the area of a polygon.
@@ -204,22 +195,21 @@ bool orient_and_split(Faces& F, std::vector<uint32_t>& source, const float* P,
   }
 
   // Fans: corners at one vertex of two faces glued across an edge share a vertex.
-  std::vector<uint32_t> parent(nc);
-  for (uint32_t c = 0; c < nc; ++c) parent[c] = c;
+  detail::UnionFind fans(nc);
   for (uint32_t c = 0; c < nc; ++c) {
     const uint32_t t = twin[c];
     if (t == kNo || t < c) continue;
     if (F.verts[c] == F.verts[t]) {
-      unite(parent, c, t), unite(parent, next[c], next[t]);
+      fans.unite(c, t), fans.unite(next[c], next[t]);
     } else {
-      unite(parent, c, next[t]), unite(parent, next[c], t);
+      fans.unite(c, next[t]), fans.unite(next[c], t);
     }
   }
   std::vector<uint32_t> fan_vertex(nc, kNo);
   std::vector<uint8_t> used(source.size(), 0);
   size_t splits = 0;
   for (uint32_t c = 0; c < nc; ++c) {
-    const uint32_t root = find_root(parent, c);
+    const uint32_t root = fans.find(c);
     if (fan_vertex[root] == kNo) {
       const uint32_t v = F.verts[c];
       if (!used[v]) {

@@ -1,11 +1,14 @@
 // Welding by exact position: an open-addressing hash table over the float bits, so the cost is
-// linear and no tolerance can merge two points that a file meant to keep apart.
+// linear and no tolerance can merge two points that a file meant to keep apart. Welding within a
+// tolerance (repair's) groups those exact groups further, over a grid of tolerance-sized cells.
 #include "limn/mesh/weld.hpp"
 
 #include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstring>
+
+#include "union_find.hpp"
 
 namespace limn {
 
@@ -80,22 +83,6 @@ void dedupe_attribute(const std::vector<float>& values, const std::vector<uint32
 std::vector<uint32_t> weld_map(std::span<const float> xyz, uint32_t* groups) {
   return group_equal(xyz.data(), xyz.size() / 3, 3, groups);
 }
-
-namespace {
-
-// Union-find over point indices; the root of a set is its smallest index.
-uint32_t find_root(std::vector<uint32_t>& parent, uint32_t i) {
-  while (parent[i] != i) i = parent[i] = parent[parent[i]];
-  return i;
-}
-
-void unite(std::vector<uint32_t>& parent, uint32_t a, uint32_t b) {
-  a = find_root(parent, a), b = find_root(parent, b);
-  if (a < b) parent[b] = a;
-  if (b < a) parent[a] = b;
-}
-
-}  // namespace
 
 std::vector<uint32_t> weld_map_within(std::span<const float> xyz, double tolerance,
                                       uint32_t* groups) {
@@ -178,13 +165,12 @@ std::vector<uint32_t> weld_map_within(std::span<const float> xyz, double toleran
     for (int k = 0; k < 3; ++k) d2 += (double(p[k]) - q[k]) * (double(p[k]) - q[k]);
     return d2 <= tol2;
   };
-  std::vector<uint32_t> parent(exact_groups);
-  for (uint32_t g = 0; g < exact_groups; ++g) parent[g] = g;
+  detail::UnionFind sets(exact_groups);
   for (uint32_t r = 0; r < runs; ++r) {
     const Cell c = cell[order[run_start[r]]];
     for (uint32_t i = run_start[r]; i < run_start[r + 1]; ++i)
       for (uint32_t j = i + 1; j < run_start[r + 1]; ++j)
-        if (close(order[i], order[j])) unite(parent, order[i], order[j]);
+        if (close(order[i], order[j])) sets.unite(order[i], order[j]);
     for (int dx = -1; dx <= 1; ++dx)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dz = -1; dz <= 1; ++dz) {
@@ -194,7 +180,7 @@ std::vector<uint32_t> weld_map_within(std::span<const float> xyz, double toleran
           if (s == kEmpty) continue;
           for (uint32_t i = run_start[r]; i < run_start[r + 1]; ++i)
             for (uint32_t j = run_start[s]; j < run_start[s + 1]; ++j)
-              if (close(order[i], order[j])) unite(parent, order[i], order[j]);
+              if (close(order[i], order[j])) sets.unite(order[i], order[j]);
         }
   }
 
@@ -203,7 +189,7 @@ std::vector<uint32_t> weld_map_within(std::span<const float> xyz, double toleran
   std::vector<uint32_t> number(exact_groups, kEmpty);
   uint32_t count = 0;
   for (size_t i = 0; i < n; ++i) {
-    const uint32_t root = find_root(parent, group[i]);
+    const uint32_t root = sets.find(group[i]);
     if (number[root] == kEmpty) number[root] = count++;
     group[i] = number[root];
   }
