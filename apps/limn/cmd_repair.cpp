@@ -35,16 +35,11 @@ void add_repair(CLI::App& app) {
     const WriteOptions w = output_options(o->out, o->to, o->ascii);
     ReadOptions r;
     r.format = parse_format_option(o->from, "--from");
-    r.soup = true;
     size_t dropped = 0;
-    r.dropped_degenerate = &dropped;
-    const Mesh soup = read_mesh(o->in, r);
+    const Mesh soup = read_soup(o->in, r, dropped);
     const double t_read = sw.lap();
-    RepairOptions options;
-    options.weld_tolerance = o->tolerance;
     RepairReport report;
-    const Mesh mesh = repair_input(soup, o->in, options, report);
-    report.degenerate_faces += dropped;  // STL and glTF drop theirs while reading
+    const Mesh mesh = repair_input(soup, dropped, o->in, o->tolerance, report);
     const double t_repair = sw.lap();
     const nlohmann::json lost = write_output(mesh, o->out, {}, w);
     const double t_write = sw.lap();

@@ -60,13 +60,22 @@ void add_repair_flags(CLI::App& cmd, RepairFlags& repair) {
       ->check(CLI::Range(0.0, 0.1));
 }
 
-Mesh repair_input(const Mesh& mesh, const std::string& path, const RepairOptions& options,
+Mesh read_soup(const std::string& path, ReadOptions r, size_t& dropped) {
+  r.soup = true;
+  r.dropped_degenerate = &dropped;
+  return read_mesh(path, r);
+}
+
+Mesh repair_input(const Mesh& soup, size_t dropped, const std::string& path, double tolerance,
                   RepairReport& report) {
-  if (mesh.face_count() == 0) throw InputError(fmt::format("{}: no faces to repair", path));
-  Mesh out = repair_mesh(mesh, options, &report);
+  if (soup.face_count() == 0) throw InputError(fmt::format("{}: no faces to repair", path));
+  RepairOptions options;
+  options.weld_tolerance = tolerance;
+  Mesh out = repair_mesh(soup, options, &report);
+  report.degenerate_faces += dropped;  // STL and glTF drop theirs while reading
   if (out.face_count() == 0)
     throw InputError(fmt::format("{}: nothing left after repair: all {} faces are degenerate", path,
-                                 mesh.face_count()));
+                                 soup.face_count() + dropped));
   fmt::print(stderr, "limn: repair {}: {}\n", path, repair_summary(report));
   return out;
 }
@@ -80,15 +89,10 @@ Mesh read_input(const std::string& path, const std::string& format, bool weld,
   ReadOptions r;
   r.format = parse_format_option(format, "--format");
   r.weld = weld;
-  r.soup = true;
   size_t dropped = 0;
-  r.dropped_degenerate = &dropped;
-  const Mesh soup = read_mesh(path, r);
-  RepairOptions options;
-  options.weld_tolerance = repair.tolerance;
+  const Mesh soup = read_soup(path, r, dropped);
   RepairReport counts;
-  Mesh out = repair_input(soup, path, options, counts);
-  counts.degenerate_faces += dropped;  // STL and glTF drop theirs while reading
+  Mesh out = repair_input(soup, dropped, path, repair.tolerance, counts);
   report = repair_json(counts);
   return out;
 }

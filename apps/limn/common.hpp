@@ -62,9 +62,13 @@ void add_repair_flags(CLI::App& cmd, RepairFlags& repair);
 /// counts as JSON (repair_json), or null without --repair. InputError when nothing is left.
 Mesh read_input(const std::string& path, const std::string& format, bool weld,
                 const RepairFlags& repair, nlohmann::json& report);
-/// Repairs `mesh` read from `path` (repair_mesh), prints the summary line on stderr and returns
-/// the result; InputError naming `path` when it has no faces before or after.
-Mesh repair_input(const Mesh& mesh, const std::string& path, const RepairOptions& options,
+/// Reads `path` with `r` as a polygon soup (faces may repeat a vertex); `dropped` receives the
+/// triangles STL and glTF drop while reading for repeating a vertex.
+Mesh read_soup(const std::string& path, ReadOptions r, size_t& dropped);
+/// Repairs `soup` read from `path` (repair_mesh with weld tolerance `tolerance`), counting the
+/// `dropped` triangles as degenerate faces too, prints the summary line on stderr and returns the
+/// result; InputError naming `path` when it has no faces before or after.
+Mesh repair_input(const Mesh& soup, size_t dropped, const std::string& path, double tolerance,
                   RepairReport& report);
 /// The counts of a repair as a JSON object.
 nlohmann::json repair_json(const RepairReport& r);
