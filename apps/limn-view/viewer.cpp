@@ -109,10 +109,10 @@ class Viewer {
 
   // Scripted mode.
   size_t next_action_ = 0, wait_frames_ = 0, frames_left_ = 0;
-  const Action* live_ = nullptr;  // the live stroke being fed, one point per frame
-  size_t live_next_ = 0, strokes_ = 0;
-  std::chrono::steady_clock::time_point live_t0_;
-  void end_live_stroke();
+  const Action* stroke_ = nullptr;  // the scripted stroke under way (live: one point a frame)
+  size_t stroke_next_ = 0, strokes_ = 0;
+  std::chrono::steady_clock::time_point stroke_t0_;
+  void end_scripted_stroke();
   bool pending_shot_ = false;
   std::filesystem::path shot_path_;
 };
@@ -237,19 +237,15 @@ void Viewer::apply(const Action& a) {
       break;
     case K::stroke: {
       // Script points are window pixels, as the mouse's are.
-      if (a.live) {
-        scene_.begin_stroke(a.brush, orbit_.camera(), true);
-        live_ = &a, live_next_ = 0;
-        live_t0_ = std::chrono::steady_clock::now();
-        display_ = Display::painted;
-        break;
-      }
+      // A live stroke is fed a point a frame by script_step; the others go at once.
       scene_.begin_stroke(a.brush, orbit_.camera(), true);
-      live_ = &a, live_t0_ = std::chrono::steady_clock::now();
+      stroke_ = &a, stroke_next_ = 0;
+      stroke_t0_ = std::chrono::steady_clock::now();
+      display_ = Display::painted;
+      if (a.live) break;
       for (size_t i = 0; i + 1 < a.points.size(); i += 2)
         scene_.stroke_to(a.points[i] - view_x_, a.points[i + 1]);
-      end_live_stroke();
-      if (display_ != Display::painted) display_ = Display::painted;
+      end_scripted_stroke();
       break;
     }
     case K::undo:
@@ -282,11 +278,11 @@ void Viewer::apply(const Action& a) {
   }
 }
 
-// Ends a scripted stroke (live_) and reports where its time went beside the library's.
-void Viewer::end_live_stroke() {
+// Ends the scripted stroke (stroke_) and reports where its time went beside the library's.
+void Viewer::end_scripted_stroke() {
   last_stroke_ = scene_.end_stroke();
   const double wall =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - live_t0_)
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - stroke_t0_)
           .count();
   const StrokeTimes& t = scene_.stroke_times();
   const StrokeStats lib = scene_.replay_stroke();
@@ -295,20 +291,20 @@ void Viewer::end_live_stroke() {
                "limn-view: stroke %zu (%s, %zu points%s): %zu dabs in %.1f ms: "
                "painting %.2f ms, texture uploads %.2f ms (%zu, %zu words), frames %.1f ms; "
                "the library alone: %zu dabs in %.2f ms; viewer/library %.2fx\n",
-               ++strokes_, live_->live ? "live" : "scripted", live_->points.size() / 2,
-               live_->live ? ", one a frame" : " at once", last_stroke_.dabs, wall, t.paint_ms,
+               ++strokes_, stroke_->live ? "live" : "scripted", stroke_->points.size() / 2,
+               stroke_->live ? ", one a frame" : " at once", last_stroke_.dabs, wall, t.paint_ms,
                t.upload_ms, t.uploads, t.upload_words, wall - viewer, lib.dabs, lib.ms,
                lib.ms > 0 ? viewer / lib.ms : 0.0);
-  live_ = nullptr;
+  stroke_ = nullptr;
 }
 
 bool Viewer::script_step() {
-  if (live_) {  // one point a frame; the frame after the last ends the stroke
-    if (live_next_ + 1 < live_->points.size()) {
-      scene_.stroke_to(live_->points[live_next_] - view_x_, live_->points[live_next_ + 1]);
-      live_next_ += 2;
+  if (stroke_) {  // a live stroke: one point a frame; the frame after the last ends it
+    if (stroke_next_ + 1 < stroke_->points.size()) {
+      scene_.stroke_to(stroke_->points[stroke_next_] - view_x_, stroke_->points[stroke_next_ + 1]);
+      stroke_next_ += 2;
     } else {
-      end_live_stroke();
+      end_scripted_stroke();
     }
     return true;
   }
@@ -620,7 +616,7 @@ void Viewer::frame() {
   glfwSwapBuffers(window_);
   // A live stroke's frames are timed apart from its painting: a software driver (llvmpipe)
   // would otherwise still be drawing on the same cores while the next dabs are painted.
-  if (live_) glFinish();
+  if (stroke_) glFinish();
 
   const auto now = std::chrono::steady_clock::now();
   frame_ms_ = std::chrono::duration<double, std::milli>(now - last_frame_).count();
