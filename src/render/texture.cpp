@@ -53,6 +53,7 @@ void GpuOctreeTexture::update(const OctreeTexture& t) {
   const size_t n = words.size(), held = m.shadow.size();
   if (!m.pool.get() || n < held) {  // new, or compacted: everything moved
     gl::upload(m.pool, m.capacity, words.data(), words.size_bytes());
+    m.shadow.assign(words.begin(), words.end());
     m.last_words = n;
   } else {
     if (n * 4 > m.capacity) {
@@ -108,10 +109,7 @@ void GpuOctreeTexture::update(const OctreeTexture& t) {
     }
     if (n > held) send(tail, n);
     m.last_words = sent;
-    gl::check("GpuOctreeTexture::update");
-    return;
   }
-  m.shadow.assign(words.begin(), words.end());
   gl::check("GpuOctreeTexture::update");
 }
 
