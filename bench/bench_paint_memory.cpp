@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "core/vec3.hpp"
 #include "limn/io/mesh_io.hpp"
 #include "limn/paint/brush.hpp"
 #include "limn/paint/surface.hpp"
@@ -31,30 +32,21 @@ namespace {
 using limn::Mesh;
 
 struct Frame {
-  float p[3], t1[3], t2[3];  // a surface point and two unit tangents there
+  limn::Vec3f p, t1, t2;  // a surface point and two unit tangents there
 };
 
 Frame seed_frame(const Mesh& m, const std::vector<float>& normals, std::mt19937& rng) {
   std::uniform_int_distribution<size_t> pick(0, m.vertex_count() - 1);
   for (;;) {
     const size_t v = pick(rng);
-    const float* n = &normals[3 * v];
-    const float len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    const limn::Vec3f n = limn::load3<float>(&normals[3 * v]);
+    const float len = limn::length(n);
     if (!(len > 0)) continue;
-    Frame f;
-    float u[3] = {n[0] / len, n[1] / len, n[2] / len};
-    const float a[3] = {std::fabs(u[0]) < 0.9f ? 1.0f : 0.0f, std::fabs(u[0]) < 0.9f ? 0.0f : 1.0f,
-                        0.0f};
-    // t1 = a x u normalised, t2 = u x t1.
-    float t1[3] = {a[1] * u[2] - a[2] * u[1], a[2] * u[0] - a[0] * u[2], a[0] * u[1] - a[1] * u[0]};
-    const float l1 = std::sqrt(t1[0] * t1[0] + t1[1] * t1[1] + t1[2] * t1[2]);
-    for (int k = 0; k < 3; ++k) t1[k] /= l1;
-    const float t2[3] = {u[1] * t1[2] - u[2] * t1[1], u[2] * t1[0] - u[0] * t1[2],
-                         u[0] * t1[1] - u[1] * t1[0]};
-    std::copy_n(&m.positions[3 * v], 3, f.p);
-    std::copy_n(t1, 3, f.t1);
-    std::copy_n(t2, 3, f.t2);
-    return f;
+    const limn::Vec3f u = (1 / len) * n;
+    const limn::Vec3f a = std::fabs(u.x) < 0.9f ? limn::Vec3f{1, 0, 0} : limn::Vec3f{0, 1, 0};
+    const limn::Vec3f c = limn::cross(a, u);
+    const limn::Vec3f t1 = (1 / limn::length(c)) * c;
+    return {limn::load3<float>(&m.positions[3 * v]), t1, limn::cross(u, t1)};
   }
 }
 
@@ -120,14 +112,15 @@ int main(int argc, char** argv) {
           std::vector<float> xyz;
           if (!std::strcmp(shape, "straight")) {
             xyz = on_surface(surface, 320 * leaf, leaf, [&](float d, float q[3]) {
-              for (int k = 0; k < 3; ++k) q[k] = f.p[k] + (d - 160 * leaf) * f.t1[k];
+              const limn::Vec3f x = f.p + (d - 160 * leaf) * f.t1;
+              q[0] = x.x, q[1] = x.y, q[2] = x.z;
             });
           } else {
             const float r = 64 * leaf;
             xyz = on_surface(surface, 1.5f * float(M_PI) * r, leaf, [&](float d, float q[3]) {
               const float a = d / r;
-              for (int k = 0; k < 3; ++k)
-                q[k] = f.p[k] + r * (std::cos(a) * f.t1[k] + std::sin(a) * f.t2[k]);
+              const limn::Vec3f x = f.p + r * (std::cos(a) * f.t1 + std::sin(a) * f.t2);
+              q[0] = x.x, q[1] = x.y, q[2] = x.z;
             });
           }
           limn::OctreeTexture t = fresh;
