@@ -30,8 +30,6 @@ namespace limn::patch_detail {
 constexpr int kMaxDepth = 16;
 constexpr float kInf = kInfiniteSharpness;
 
-// First ptex face of each cage face (one per quad, one per corner of any other face), and the
-// total at the end.
 // The faces around each vertex of `cage`, ascending (CSR: offsets has vertex_count() + 1
 // entries); what region builds and the channel's blocks need of the topology, 8 bytes a corner.
 inline void vertex_faces(const Mesh& cage, std::vector<uint32_t>& offsets,
@@ -46,6 +44,8 @@ inline void vertex_faces(const Mesh& cage, std::vector<uint32_t>& offsets,
     for (const uint32_t v : cage.face(f)) faces[fill[v]++] = f;
 }
 
+// First ptex face of each cage face (one per quad, one per corner of any other face), and the
+// total at the end.
 inline std::vector<uint32_t> ptex_offsets(const Mesh& cage) {
   std::vector<uint32_t> first(1, 0);
   first.reserve(cage.face_count() + 1);
