@@ -1,29 +1,20 @@
-// limn render: a PNG of a mesh, or of its adaptive limit surface drawn with tessellation shaders,
-// rendered headless (EGL; Mesa's llvmpipe without a GPU).
+// limn render: a PNG of a mesh, or of its adaptive limit surface drawn with tessellation shaders.
+// The options are checked here; the drawing runs in the GL module (render_run.cpp).
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
-#include <optional>
+#include <filesystem>
 #include <sstream>
 
-#include "adaptive.hpp"
-#include "common.hpp"
-#include "limn/paint/file.hpp"
-#include "limn/render/draw.hpp"
-#include "limn/render/gl_context.hpp"
-#include "limn/render/image.hpp"
+#include "gl_commands.hpp"
 
 namespace limn::cli {
 
 void add_render(CLI::App& app) {
   auto* cmd = app.add_subcommand("render", "Render a mesh or its adaptive limit surface to PNG");
-  struct Opts {
-    std::string mesh, out, format, background = "1,1,1", texture;
-    bool adaptive = false, wireframe = false, flat = false, nearest = false, json = false,
-         weld = false;
-    float uv_checker = 0.0f;
-    int samples = 4;
-    AdaptiveOpts a;
+  struct Opts : RenderJob {
+    std::string background = "1,1,1";
   };
   auto o = std::make_shared<Opts>();
   cmd->add_option("MESH", o->mesh,
@@ -86,73 +77,10 @@ void add_render(CLI::App& app) {
       if (k != 3)
         throw InputError(fmt::format("--background {}: three numbers 0-1", o->background));
     }
-    int w = 1280, h = 720;
-    check_adaptive(o->a, w, h);
-
-    Stopwatch sw;
-    const Mesh mesh = read_input(o->mesh, o->format, o->weld);
-    std::optional<OctreeTexture> texture;
-    if (!o->texture.empty()) texture = load_lot(o->texture);
-    nlohmann::json timings = {{"read", sw.lap()}};
-    GlContext gl;
-    timings["context"] = sw.lap();
-    std::optional<GpuOctreeTexture> gpu_texture;
-    if (texture) gpu_texture.emplace(*texture);
-    RenderTarget target(w, h, o->samples);
-    DrawOptions d;
-    d.outline = o->wireframe;
-    d.depth_colors = o->a.depth_colors;
-    d.pixels_per_segment = pps;
-    d.factor = fixed_tess ? o->a.tess : 0;
-    d.texture = gpu_texture ? &*gpu_texture : nullptr;
-    d.texture_nearest = o->nearest;
-    d.uv_checker = o->uv_checker;
-    if (d.uv_checker > 0 && mesh.uv_indices.empty())
-      throw InputError(fmt::format("{}: --uv-checker: the mesh has no UVs", o->mesh));
-    DrawStats st;
-    nlohmann::json patches = nullptr;
-    Camera cam;
-    if (o->adaptive) {
-      const AdaptiveSurface surf = build_adaptive(mesh, o->a, w, h, sw, timings);
-      cam = surf.cam;
-      PatchDrawer drawer(mesh, surf.table, surf.points);
-      timings["upload"] = sw.lap();
-      target.begin(bg);
-      st = drawer.draw(cam, d);
-      patches = {{"regular", surf.table.regular_params.size()},
-                 {"gregory", surf.table.gregory_params.size()}};
-    } else {
-      cam = frame_camera(mesh, w, h);
-      if (!o->a.camera.empty()) cam = parse_camera(o->a.camera, cam);
-      MeshDrawer drawer(mesh, {}, o->flat);
-      timings["upload"] = sw.lap();
-      target.begin(bg);
-      st = drawer.draw(cam, d);
-    }
-    timings["draw"] = sw.lap();
-    write_png(o->out, w, h, target.read_rgba());
-    timings["write"] = sw.lap();
-    if (o->json) {
-      nlohmann::json j = {{"input", o->mesh},
-                          {"output", o->out},
-                          {"renderer", gl.renderer()},
-                          {"texture", texture ? nlohmann::json(o->texture) : nlohmann::json()},
-                          {"resolution", {w, h}},
-                          {"camera",
-                           {{"eye", {cam.eye[0], cam.eye[1], cam.eye[2]}},
-                            {"target", {cam.target[0], cam.target[1], cam.target[2]}},
-                            {"fovy_deg", cam.fovy_deg}}},
-                          {"drawn", st.patches},
-                          {"patches", patches},
-                          {"triangles", st.triangles},
-                          {"gpu_ms", st.gpu_ms},
-                          {"cpu_draw_ms", st.cpu_ms},
-                          {"timings_ms", timings}};
-      fmt::print("{}\n", j.dump(2));
-    } else {
-      fmt::print("{} -> {}: {} {} drawn, {} triangles, {}x{} ({:.1f} ms)\n", o->mesh, o->out,
-                 st.patches, o->adaptive ? "patches" : "polygons", st.triangles, w, h, sw.ms());
-    }
+    check_adaptive(o->a, o->width, o->height);
+    o->fixed_tess = fixed_tess, o->pps = pps;
+    std::copy(bg, bg + 4, o->clear_color);
+    reinterpret_cast<RenderEntry>(gl_entry(kRenderEntry))(*o);
   });
 }
 

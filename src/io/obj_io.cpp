@@ -413,8 +413,6 @@ Mesh read_obj(std::string_view data, std::string_view name, bool soup) {
   return mesh;
 }
 
-namespace {}  // namespace
-
 void write_obj(const Mesh& m, std::string& out) {
   out.reserve(out.size() + m.vertex_count() * 36 + m.corner_count() * 8);
   out += "# limn\n";

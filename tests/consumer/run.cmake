@@ -46,3 +46,17 @@ foreach(f bin/limn include/limn/mesh/mesh.hpp include/limn/io/mesh_io.hpp includ
     message(FATAL_ERROR "not installed: ${f}")
   endif()
 endforeach()
+# The installed CLI starts without the GL stack and finds its GL module (render, demo) where it
+# was installed.
+execute_process(COMMAND ldd ${WORK_DIR}/prefix/bin/limn OUTPUT_VARIABLE cli_libs)
+if(cli_libs MATCHES "epoxy|libEGL|libGL")
+  message(FATAL_ERROR "the limn CLI loads OpenGL at start:\n${cli_libs}")
+endif()
+execute_process(COMMAND ${WORK_DIR}/prefix/bin/limn shape cube -o ${WORK_DIR}/cube.obj
+                RESULT_VARIABLE rc)
+execute_process(COMMAND ${WORK_DIR}/prefix/bin/limn render ${WORK_DIR}/cube.obj
+                        -o ${WORK_DIR}/cube.png --samples 1 --resolution 64x48
+                RESULT_VARIABLE rc2 ERROR_VARIABLE err)
+if(rc OR rc2 OR NOT EXISTS ${WORK_DIR}/cube.png)
+  message(FATAL_ERROR "the installed limn render failed (${rc}, ${rc2}): ${err}")
+endif()
