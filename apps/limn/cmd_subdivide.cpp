@@ -8,6 +8,7 @@
 #include <map>
 #include <sstream>
 
+#include "../common/jobs.hpp"
 #include "adaptive.hpp"
 #include "common.hpp"
 #include "limn/subdiv/depth.hpp"
@@ -160,106 +161,18 @@ void add_subdivide(CLI::App& app) {
       run_adaptive(o->mesh, o->out, o->format, o->weld, o->repair, o->a, o->json);
       return;
     }
-    if (o->uniform < 0 || o->uniform > 8)
-      throw InputError(fmt::format("--uniform {}: level must be 0-8", o->uniform));
     if (format_from_path(o->out) == MeshFormat::automatic)
       throw InputError(fmt::format("{}: cannot tell the output format from the extension", o->out));
     Stopwatch sw;
     nlohmann::json repaired;
     const Mesh cage = read_input(o->mesh, o->format, o->weld, o->repair, repaired);
     const double t_read = sw.lap();
-    // Every level multiplies corners by 4 (after the first, which makes one quad per corner).
-    // The lean path needs ~70 bytes per output quad; with --limit every level, its stencils and
-    // the limit masks are kept (~500 bytes per quad).
-    const double faces = double(cage.corner_count()) * std::pow(4.0, o->uniform - 1);
-    const double cap = o->limit ? 4e7 : 3.5e8;
-    if (o->uniform > 0 && faces > cap)
-      throw InputError(fmt::format("{}: level {}{} would make {:.3g} faces; limn stops at {:.3g}",
-                                   o->mesh, o->uniform, o->limit ? " with --limit" : "", faces,
-                                   cap));
-    const SubdivOptions options = subdiv_options(cage);
-    Mesh out;
-    nlohmann::json levels = nlohmann::json::array();
-    nlohmann::json timings = {{"read", t_read}};
-    if (!o->limit) {
-      // Lean: only the last level is kept, stencils are applied chunk by chunk and dropped.
-      SubdivideStats st;
-      out = subdivide_uniform(cage, o->uniform, options, &st);
-      for (size_t k = 0; k < st.levels.size(); ++k)
-        levels.push_back({{"level", k},
-                          {"vertices", st.levels[k].vertices},
-                          {"faces", st.levels[k].faces},
-                          {"edges", st.levels[k].edges},
-                          {"stencil_entries", st.levels[k].stencil_entries}});
-      timings["topology"] = st.topology_ms;
-      timings["stencils_and_apply"] = st.stencils_ms;
-      timings["output"] = st.output_ms;
-    } else {
-      // UVs refined as face-varying data and pushed to their own limit.
-      const FaceVaryingInput uv_channel{cage.uv_indices, cage.uvs.size() / 2, true};
-      const bool uv = !cage.uv_indices.empty();
-      const UniformRefinement r =
-          refine_uniform(cage, o->uniform, options, {&uv_channel, uv ? 1u : 0u});
-      timings["topology_refine_stencils"] = sw.lap();
-      std::vector<float> pos = r.positions(cage, o->uniform);
-      timings["apply"] = sw.lap();
-      const RefinedLevel& L = r.levels.back();
-      const LimitStencils ls = limit_stencils(r, o->uniform);
-      std::vector<float> p(pos.size()), t1(pos.size()), t2(pos.size());
-      apply_stencils(ls.position, pos.data(), p.data(), 3);
-      apply_stencils(ls.tangent1, pos.data(), t1.data(), 3);
-      apply_stencils(ls.tangent2, pos.data(), t2.data(), 3);
-      out.normals = normals_from_tangents(t1, t2);
-      out.positions = std::move(p);
-      if (cage.colors.size() == 4 * cage.vertex_count()) {
-        std::vector<float> c = cage.colors, next;
-        for (const StencilTable& t : r.stencils) {
-          next.assign(4 * t.size(), 0.0f);
-          apply_stencils(t, c.data(), next.data(), 4);
-          c.swap(next);
-        }
-        out.colors.resize(c.size());
-        apply_stencils(ls.position, c.data(), out.colors.data(), 4);
-      }
-      std::vector<uint32_t> corner_uv;
-      if (uv) {
-        const FaceVaryingLevels& fl = r.face_varying[0];
-        const std::vector<float> last = fl.values(cage.uvs.data(), 2, o->uniform);
-        out.uvs.resize(last.size());
-        apply_stencils(fl.limit, last.data(), out.uvs.data(), 2);
-        corner_uv = fl.corner_values.back();
-      }
-      timings["limit"] = sw.lap();
-      // Holes are refined for their neighbours but make no surface.
-      for (size_t f = 0; f < L.face_count(); ++f) {
-        if (L.face_hole[f]) continue;
-        const uint32_t b = L.face_offsets[f], e = L.face_offsets[f + 1];
-        out.add_face(std::span<const uint32_t>(L.face_vertices.data() + b, e - b));
-        if (uv) out.uv_indices.insert(out.uv_indices.end(), &corner_uv[b], &corner_uv[b] + (e - b));
-      }
-      out.normal_indices = out.face_vertices;
-      // Remaining sharpness travels as OpenSubdiv tags, so the result can be refined further.
-      for (size_t e = 0; e < L.edge_count(); ++e)
-        if (L.edge_sharpness[e] > 0.0f) {
-          out.crease_edges.insert(out.crease_edges.end(),
-                                  {L.edge_vertices[2 * e], L.edge_vertices[2 * e + 1]});
-          out.crease_sharpness.push_back(L.edge_sharpness[e]);
-        }
-      for (size_t v = 0; v < L.vertex_count(); ++v)
-        if (L.vertex_sharpness[v] > 0.0f) {
-          out.corner_vertices.push_back(static_cast<uint32_t>(v));
-          out.corner_sharpness.push_back(L.vertex_sharpness[v]);
-        }
-      out.tags = cage.tags;
-      for (size_t k = 0; k < r.levels.size(); ++k) {
-        const RefinedLevel& l = r.levels[k];
-        levels.push_back({{"level", k},
-                          {"vertices", l.vertex_count()},
-                          {"faces", l.face_count()},
-                          {"edges", l.edge_count()},
-                          {"stencil_entries", k == 0 ? 0 : r.stencils[k - 1].indices.size()}});
-      }
-    }
+    jobs::UniformOutcome result =
+        jobs::subdivide_uniform(cage, o->uniform, o->limit, o->mesh, jobs::Names::cli);
+    const Mesh& out = result.mesh;
+    const nlohmann::json& levels = result.levels;
+    nlohmann::json timings = result.timings;
+    timings["read"] = t_read;
     sw.lap();
     const nlohmann::json dropped = write_output(out, o->out);
     timings["write"] = sw.lap();

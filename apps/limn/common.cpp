@@ -97,20 +97,6 @@ Mesh read_input(const std::string& path, const std::string& format, bool weld,
   return out;
 }
 
-nlohmann::json repair_json(const RepairReport& r) {
-  return {{"welded_vertices", r.welded_vertices},
-          {"degenerate_faces", r.degenerate_faces},
-          {"split_faces", r.split_faces},
-          {"duplicate_faces", r.duplicate_faces},
-          {"flipped_faces", r.flipped_faces},
-          {"non_manifold_edges", r.non_manifold_edges},
-          {"unorientable_edges", r.unorientable_edges},
-          {"split_vertices", r.split_vertices},
-          {"unreferenced_vertices", r.unreferenced_vertices},
-          {"components", r.components},
-          {"closed_components", r.closed_components}};
-}
-
 std::string repair_summary(const RepairReport& r) {
   std::vector<std::string> parts;
   const auto add = [&](size_t n, const char* one, const char* many) {
@@ -142,54 +128,6 @@ nlohmann::json write_output(const Mesh& mesh, const std::string& path,
     fmt::print(stderr, "limn: warning: {}: dropped {} (not carried to this output)\n", path,
                fmt::join(lost, ", "));
   return nlohmann::json(lost);
-}
-
-nlohmann::json stats_json(const MeshStats& s) {
-  using nlohmann::json;
-  json arity = json::object(), valence = json::object();
-  for (auto [k, n] : s.faces_by_arity) arity[std::to_string(k)] = n;
-  for (auto [k, n] : s.valence_histogram) valence[std::to_string(k)] = n;
-  json j = {
-      {"vertices", s.vertices},
-      {"referenced_vertices", s.referenced_vertices},
-      {"unreferenced_vertices", s.unreferenced_vertices},
-      {"faces", s.faces},
-      {"faces_by_arity", arity},
-      {"corners", s.corners},
-      {"edges", s.edges},
-      {"boundary_edges", s.boundary_edges},
-      {"boundary_loops", s.boundary_loops},
-      {"components", s.components},
-      {"euler_characteristic", s.euler_characteristic},
-      {"genus", s.genus >= 0 ? json(s.genus) : json(nullptr)},
-      {"closed", s.boundary_edges == 0},
-      {"manifold", s.non_manifold_edges == 0 && s.non_manifold_vertices == 0},
-      {"non_manifold_edges", s.non_manifold_edges},
-      {"non_manifold_vertices", s.non_manifold_vertices},
-      {"consistently_oriented", s.inconsistent_edges == 0},
-      {"inconsistent_edges", s.inconsistent_edges},
-      {"degenerate_faces", s.degenerate_faces},
-      {"extraordinary_vertices", s.extraordinary_vertices},
-      {"valence_histogram", valence},
-      {"crease_edges", s.crease_edges},
-      {"infinitely_sharp_crease_edges", s.infinitely_sharp_creases},
-      {"corner_vertices", s.corner_vertices},
-      {"hole_faces", s.hole_faces},
-      {"surface_area", s.surface_area},
-      {"has_normals", s.has_normals},
-      {"has_uvs", s.has_uvs},
-      {"uv_values", s.uv_values},
-      {"uv_seam_edges", s.uv_seam_edges},
-      {"has_colors", s.has_colors},
-  };
-  if (s.bbox.empty()) {
-    j["bbox"] = nullptr;
-  } else {
-    j["bbox"] = {{"min", {s.bbox.min[0], s.bbox.min[1], s.bbox.min[2]}},
-                 {"max", {s.bbox.max[0], s.bbox.max[1], s.bbox.max[2]}},
-                 {"diagonal", s.bbox.diagonal()}};
-  }
-  return j;
 }
 
 std::string stats_text(const MeshStats& s) {

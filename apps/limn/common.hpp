@@ -6,11 +6,15 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "../common/reports.hpp"
 #include "limn/io/mesh_io.hpp"
 #include "limn/mesh/repair.hpp"
 #include "limn/mesh/topology.hpp"
 
 namespace limn::cli {
+
+using reports::repair_json;
+using reports::stats_json;
 
 void add_info(CLI::App& app);
 void add_convert(CLI::App& app);
@@ -70,8 +74,6 @@ Mesh read_soup(const std::string& path, ReadOptions r, size_t& dropped);
 /// result; InputError naming `path` when it has no faces before or after.
 Mesh repair_input(const Mesh& soup, size_t dropped, const std::string& path, double tolerance,
                   RepairReport& report);
-/// The counts of a repair as a JSON object.
-nlohmann::json repair_json(const RepairReport& r);
 /// One line: "welded 3 vertices, dropped 2 degenerate faces, ..." or "nothing to repair".
 std::string repair_summary(const RepairReport& r);
 
@@ -92,7 +94,6 @@ std::vector<float> parse_numbers(const std::string& s, const char* option);
 nlohmann::json write_output(const Mesh& mesh, const std::string& path,
                             std::vector<std::string> lost = {}, const WriteOptions& opt = {});
 
-nlohmann::json stats_json(const MeshStats& s);
 /// Human-readable multi-line summary of the stats.
 std::string stats_text(const MeshStats& s);
 

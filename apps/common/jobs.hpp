@@ -1,0 +1,60 @@
+// limn's jobs as the CLI runs them, on meshes in memory: option checks, the library calls in
+// order, and the JSON report. The CLI adds files around them (read, write, --json); the Python
+// module calls the same functions, so both take the same options and give the same results.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "limn/mesh/mesh.hpp"
+#include "limn/simplify/vsa.hpp"
+
+namespace limn::jobs {
+
+/// How option names appear in error messages: "--target-error" for the CLI, "target_error" for
+/// Python keyword arguments.
+enum class Names { cli, python };
+/// `dashed` ("target-error") as the caller spells it.
+std::string option_name(Names names, std::string_view dashed);
+
+/// `limn simplify`'s options (its defaults; names as its flags).
+struct SimplifyJob {
+  std::optional<size_t> proxies;       ///< none: 100, or 10 to start from with target_error
+  std::optional<double> target_error;  ///< none: K proxies, no error target
+  size_t max_proxies = 0;
+  std::string method = "greedy", seeding = "curvature";
+  uint64_t seed = 1;
+  bool no_fill = false;
+  size_t iterations = 30, teleports = 16;
+  double split_threshold = 0.5;
+  bool polygons = false;
+  std::optional<size_t> distance;  ///< points sampled for the distance report; none: no report
+};
+
+/// Throws InputError naming the first bad option.
+void check(const SimplifyJob& job, Names names);
+
+struct SimplifyOutcome {
+  VsaResult result;
+  nlohmann::json report;  ///< reports::simplify_json + "distance", "valid", "timings_ms"
+};
+
+/// Simplifies `mesh` (named `name` in errors): VSA, the validity check (std::runtime_error when the
+/// output is invalid: nothing must be written) and, when asked, the distance report.
+SimplifyOutcome simplify(const Mesh& mesh, const SimplifyJob& job, std::string_view name);
+
+/// `limn subdivide --uniform LEVEL [--limit]`: the lean path (only the last level kept), or with
+/// `limit` every level refined (UVs as face-varying data) and pushed to the limit surface, with
+/// limit normals, UVs and colours. Remaining sharpness comes out as crease and corner tags.
+struct UniformOutcome {
+  Mesh mesh;
+  nlohmann::json levels;   ///< per level: vertices, faces, edges, stencil entries
+  nlohmann::json timings;  ///< ms per phase
+};
+/// InputError for a level outside 0-8 or an output past limn's size cap.
+UniformOutcome subdivide_uniform(const Mesh& cage, int level, bool limit, std::string_view name,
+                                 Names names);
+
+}  // namespace limn::jobs
