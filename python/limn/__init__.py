@@ -1,0 +1,142 @@
+"""limn: adaptive subdivision, octree painting and shape approximation for surfaces.
+
+Meshes are numpy arrays without copies (:class:`Mesh`); every job of the ``limn`` command line is
+a function with keyword arguments named like the command's options, returning the command's
+``--json`` report as a dict. Long calls release the GIL. Bad input raises :class:`InputError` (a
+``ValueError``) with the command line's one-line message.
+
+    import limn
+    mesh = limn.read_mesh("scan.obj")
+    result = limn.simplify(mesh, proxies=200)
+    limn.write_mesh(result.mesh, "cage.obj")
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import warnings
+from typing import Any, Optional
+
+import numpy as np
+
+from ._limn import (InputError, Mesh, RepairableError, __version__, read_mesh, shape,
+                    shape_names)
+from . import _limn
+
+__all__ = [
+    "InputError",
+    "Mesh",
+    "RepairResult",
+    "RepairableError",
+    "SimplifyResult",
+    "SubdivideResult",
+    "__version__",
+    "info",
+    "read_mesh",
+    "repair",
+    "shape",
+    "shape_names",
+    "simplify",
+    "subdivide",
+    "write_mesh",
+]
+
+
+def write_mesh(mesh: Mesh, path: str | os.PathLike, *, format: Optional[str] = None,
+               ascii: bool = False) -> list[str]:
+    """Writes ``mesh`` to ``path`` atomically (a temporary file renamed into place).
+
+    format: 'obj', 'ply', 'off', 'stl' or 'glb' (default: by extension). ascii: PLY as text.
+    Returns the attributes the format cannot store (e.g. ``['uv']`` for STL); when there are
+    any, a ``UserWarning`` names them too, as the command line warns on stderr.
+    """
+    dropped = _limn._write_mesh(mesh, os.fspath(path), format, ascii)
+    if dropped:
+        warnings.warn(f"{os.fspath(path)}: dropped {', '.join(dropped)} (not carried to this "
+                      "output)", stacklevel=2)
+    return dropped
+
+
+def info(mesh: Mesh) -> dict[str, Any]:
+    """``limn info --json``: counts, manifoldness, orientation, genus, valences, tags, bbox."""
+    return _limn._info(mesh)
+
+
+@dataclasses.dataclass
+class RepairResult:
+    """The repaired mesh, and ``stats``: the counts ``limn repair --json`` reports."""
+    mesh: Mesh
+    stats: dict[str, Any]
+
+
+def repair(mesh: Mesh, *, weld_tolerance: float = 1e-6) -> RepairResult:
+    """``limn repair``: weld, drop degenerate and duplicate faces, orient each piece (outward
+    when closed), split non-manifold edges and vertices, drop unreferenced vertices.
+
+    weld_tolerance: a fraction of the bounding-box diagonal (0: equal positions only). Every
+    output vertex is an input vertex; UVs, normals, colours and tags follow.
+    """
+    out, stats = _limn._repair(mesh, float(weld_tolerance))
+    return RepairResult(out, stats)
+
+
+@dataclasses.dataclass
+class SimplifyResult:
+    """What :func:`simplify` made.
+
+    mesh: the simplified mesh (its vertices are input vertices). labels: (faces,) uint32, the
+    cluster of every input face. face_cluster: the cluster of every output face.
+    vertex_source: the input vertex of every output vertex. stats: ``limn simplify --json``'s
+    report (energy, clusters, counts, meshing and optimiser counters, timings).
+    """
+    mesh: Mesh
+    labels: np.ndarray
+    face_cluster: np.ndarray
+    vertex_source: np.ndarray
+    stats: dict[str, Any]
+
+
+def simplify(mesh: Mesh, *, proxies: Optional[int] = None, target_error: Optional[float] = None,
+             max_proxies: int = 0, method: str = "greedy", seeding: str = "curvature",
+             seed: int = 1, no_fill: bool = False, iterations: int = 30, teleports: int = 16,
+             split_threshold: float = 0.5, polygons: bool = False,
+             distance: Optional[int | bool] = None) -> SimplifyResult:
+    """``limn simplify``: variational shape approximation into a few feature-aligned polygons.
+
+    proxies: K clusters (default 100, or 10 to start from with target_error). target_error: add
+    clusters until E / surface area <= this (max_proxies caps K; 0: a third of the faces).
+    method: 'greedy' (local greedy optimiser) or 'lloyd'. seeding: 'curvature' or 'random'
+    (seed picks the seed faces). no_fill: keep the K curvature seeding reaches. iterations:
+    Lloyd's cap. teleports: greedy's merge-and-split moves after convergence (0: as published).
+    split_threshold: chain splitting in meshing. polygons: one polygon per cluster instead of
+    triangles. distance: also measure Hausdorff and RMS distances with this many samples (True:
+    200000). The input must be an edge-manifold, oriented mesh (see :func:`repair`).
+    """
+    if distance is True:
+        distance = 200000
+    elif distance is False:
+        distance = None
+    out, labels, face_cluster, vertex_source, stats = _limn._simplify(
+        mesh, proxies, target_error, max_proxies, method, seeding, seed, no_fill, iterations,
+        teleports, split_threshold, polygons, distance)
+    return SimplifyResult(out, labels, face_cluster, vertex_source, stats)
+
+
+@dataclasses.dataclass
+class SubdivideResult:
+    """The subdivided mesh, and ``stats``: ``limn subdivide --json``'s per-level counts and
+    timings."""
+    mesh: Mesh
+    stats: dict[str, Any]
+
+
+def subdivide(mesh: Mesh, *, uniform: int, limit: bool = False) -> SubdivideResult:
+    """``limn subdivide --uniform L [--limit]``: Catmull-Clark refinement of every face L times
+    (0-8), with OpenSubdiv's rules for the cage's creases, corners, holes and boundary tags.
+
+    limit: push the points to the limit surface, with limit normals (UVs refined as face-varying
+    data and colours come along); without it only the last level is kept (the lean path).
+    """
+    out, stats = _limn._subdivide_uniform(mesh, int(uniform), bool(limit))
+    return SubdivideResult(out, stats)

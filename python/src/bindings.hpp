@@ -1,0 +1,18 @@
+// The pieces of the _limn extension (module.cpp puts them together).
+#pragma once
+
+#include <pybind11/pybind11.h>
+
+#include <nlohmann/json.hpp>
+
+namespace limn::py_bind {
+
+namespace py = pybind11;
+
+/// A JSON report as Python objects (dict, list, str, int, float, bool, None).
+py::object to_python(const nlohmann::json& j);
+
+void bind_mesh(py::module_& m);  ///< Mesh, read_mesh, _write_mesh, _info
+void bind_jobs(py::module_& m);  ///< _simplify, _subdivide_uniform, _repair
+
+}  // namespace limn::py_bind

@@ -1,0 +1,95 @@
+// The jobs of the CLI on meshes in memory (apps/common/jobs.hpp), with the GIL released while
+// they run. limn/__init__.py wraps them with keyword arguments and result classes.
+#include <pybind11/stl.h>
+
+#include "arrays.hpp"
+#include "bindings.hpp"
+#include "jobs.hpp"
+#include "limn/mesh/repair.hpp"
+#include "reports.hpp"
+
+namespace limn::py_bind {
+
+namespace {
+
+// A vector moved into a numpy array that owns it (no copy).
+template <class T>
+py::array_t<T> owned(std::vector<T>&& v) {
+  auto* heap = new std::vector<T>(std::move(v));
+  py::capsule free_it(heap, [](void* p) { delete static_cast<std::vector<T>*>(p); });
+  return py::array_t<T>({py::ssize_t(heap->size())}, {py::ssize_t(sizeof(T))}, heap->data(),
+                        free_it);
+}
+
+}  // namespace
+
+void bind_jobs(py::module_& m) {
+  m.def(
+      "_simplify",
+      [](const Mesh& mesh, std::optional<size_t> proxies, std::optional<double> target_error,
+         size_t max_proxies, const std::string& method, const std::string& seeding, uint64_t seed,
+         bool no_fill, size_t iterations, size_t teleports, double split_threshold, bool polygons,
+         std::optional<size_t> distance) {
+        jobs::SimplifyJob job;
+        job.proxies = proxies;
+        job.target_error = target_error;
+        job.max_proxies = max_proxies;
+        job.method = method;
+        job.seeding = seeding;
+        job.seed = seed;
+        job.no_fill = no_fill;
+        job.iterations = iterations;
+        job.teleports = teleports;
+        job.split_threshold = split_threshold;
+        job.polygons = polygons;
+        job.distance = distance;
+        jobs::check(job, jobs::Names::python);
+        jobs::SimplifyOutcome out;
+        {
+          py::gil_scoped_release unlocked;
+          out = jobs::simplify(mesh, job, "mesh");
+        }
+        SimplifiedMesh& s = out.result.output;
+        return py::make_tuple(std::move(s.mesh), owned(std::move(out.result.labels)),
+                              owned(std::move(s.face_cluster)), owned(std::move(s.vertex_source)),
+                              to_python(out.report));
+      },
+      py::arg("mesh"), py::arg("proxies"), py::arg("target_error"), py::arg("max_proxies"),
+      py::arg("method"), py::arg("seeding"), py::arg("seed"), py::arg("no_fill"),
+      py::arg("iterations"), py::arg("teleports"), py::arg("split_threshold"), py::arg("polygons"),
+      py::arg("distance"));
+  m.def(
+      "_subdivide_uniform",
+      [](const Mesh& cage, int level, bool limit) {
+        jobs::UniformOutcome out;
+        {
+          py::gil_scoped_release unlocked;
+          out = jobs::subdivide_uniform(cage, level, limit, "mesh", jobs::Names::python);
+        }
+        nlohmann::json report = {{"level", level},
+                                 {"limit", limit},
+                                 {"levels", out.levels},
+                                 {"output_vertices", out.mesh.vertex_count()},
+                                 {"output_faces", out.mesh.face_count()},
+                                 {"timings_ms", out.timings}};
+        return py::make_tuple(std::move(out.mesh), to_python(report));
+      },
+      py::arg("cage"), py::arg("level"), py::arg("limit"));
+  m.def(
+      "_repair",
+      [](const Mesh& soup, double weld_tolerance) {
+        RepairOptions o;
+        o.weld_tolerance = weld_tolerance;
+        RepairReport report;
+        Mesh out;
+        {
+          py::gil_scoped_release unlocked;
+          validate_soup(soup);
+          out = repair_mesh(soup, o, &report);
+        }
+        return py::make_tuple(std::move(out), to_python(reports::repair_json(report)));
+      },
+      py::arg("mesh"), py::arg("weld_tolerance"));
+}
+
+}  // namespace limn::py_bind

@@ -1,0 +1,116 @@
+"""The CLI's jobs from Python: the same meshes and reports as `limn ... --json`, the GIL released
+while they run."""
+
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import limn
+
+TIMING_KEYS = {"timings_ms"}
+FILE_KEYS = {"input", "output", "dropped", "repair", "labels"}
+
+
+def without(report, keys):
+    return {k: v for k, v in report.items() if k not in keys}
+
+
+@pytest.mark.parametrize("name,args", [
+    ("spot", dict(proxies=60)),
+    ("fandisk", dict(proxies=40, polygons=True)),
+    ("spot", dict(target_error=0.002, method="lloyd", seeding="random", seed=3)),
+])
+def test_simplify_equals_the_cli(tmp_path, models, cli, name, args):
+    src = models / "tri" / f"{name}.obj"
+    flags = []
+    for key, value in args.items():
+        flag = "--" + key.replace("_", "-")
+        flags += [flag] if value is True else [flag, value]
+    out, labels = tmp_path / "cli.obj", tmp_path / "labels.txt"
+    expected = cli("simplify", src, "-o", out, "--labels", labels, *flags, json_out=True)
+    result = limn.simplify(limn.read_mesh(src), **args)
+    assert without(result.stats, TIMING_KEYS) == without(expected, TIMING_KEYS | FILE_KEYS)
+    limn.write_mesh(result.mesh, tmp_path / "py.obj")
+    assert (tmp_path / "py.obj").read_bytes() == out.read_bytes()
+    assert np.array_equal(result.labels, np.loadtxt(labels, dtype=np.uint32))
+    # Per output face and vertex: clusters in range, vertices copied from the input.
+    assert result.face_cluster.shape == (result.mesh.face_count,)
+    assert result.face_cluster.max() < result.stats["clusters"]
+    source = limn.read_mesh(src).positions[result.vertex_source]
+    assert np.array_equal(source, result.mesh.positions)
+
+
+def test_simplify_distance_and_bad_options(models):
+    mesh = limn.read_mesh(models / "tri" / "spot.obj")
+    result = limn.simplify(mesh, proxies=30, distance=5000)
+    assert result.stats["distance"]["samples"] == 5000
+    assert 0 < result.stats["distance"]["hausdorff"] < 0.2
+    with pytest.raises(limn.InputError, match="proxies 0"):
+        limn.simplify(mesh, proxies=0)
+    with pytest.raises(limn.InputError, match="method 'newton'|method newton"):
+        limn.simplify(mesh, method="newton")
+    with pytest.raises(limn.InputError, match="target_error"):
+        limn.simplify(mesh, target_error=-1)
+
+
+@pytest.mark.parametrize("limit", [False, True])
+def test_subdivide_equals_the_cli(tmp_path, cli, limit):
+    cage = limn.shape("cage")
+    limn.write_mesh(cage, tmp_path / "cage.obj")
+    flags = ["--limit"] if limit else []
+    expected = cli("subdivide", tmp_path / "cage.obj", "-o", tmp_path / "cli.obj", "--uniform", 2,
+                   *flags, json_out=True)
+    result = limn.subdivide(cage, uniform=2, limit=limit)
+    for key in ("level", "limit", "levels", "output_vertices", "output_faces"):
+        assert result.stats[key] == expected[key], key
+    limn.write_mesh(result.mesh, tmp_path / "py.obj")
+    assert (tmp_path / "py.obj").read_bytes() == (tmp_path / "cli.obj").read_bytes()
+    with pytest.raises(limn.InputError, match="uniform 9"):
+        limn.subdivide(cage, uniform=9)
+
+
+def test_repair_equals_the_cli(tmp_path, cli):
+    # A cube soup: every face its own vertices, one face flipped, one duplicate.
+    cube = limn.shape("cube")
+    corners = cube.positions[cube.face_vertices]
+    faces = np.arange(len(corners)).reshape(-1, 4)
+    faces[2] = faces[2][::-1]
+    faces = np.vstack([faces, faces[:1]])
+    soup = limn.Mesh.from_arrays(corners, faces)
+    limn.write_mesh(soup, tmp_path / "soup.obj")
+    expected = cli("repair", tmp_path / "soup.obj", "-o", tmp_path / "cli.obj", json_out=True)
+    result = limn.repair(soup)
+    assert result.stats == expected["repair"]
+    assert result.stats["flipped_faces"] == 1 and result.stats["duplicate_faces"] == 1
+    limn.write_mesh(result.mesh, tmp_path / "py.obj")
+    assert (tmp_path / "py.obj").read_bytes() == (tmp_path / "cli.obj").read_bytes()
+    assert limn.info(result.mesh)["closed"]
+
+
+def test_long_calls_release_the_gil():
+    cage = limn.shape("torus-dense-small")
+    ticks = []
+    stop = threading.Event()
+
+    def count():
+        while not stop.is_set():
+            ticks.append(time.perf_counter())
+            time.sleep(0.001)
+
+    thread = threading.Thread(target=count)
+    thread.start()
+    try:
+        time.sleep(0.05)
+        start = time.perf_counter()
+        result = limn.subdivide(cage, uniform=4)
+        end = time.perf_counter()
+    finally:
+        stop.set()
+        thread.join()
+    assert end - start > 0.05, "the call was too short to tell"
+    during = [t for t in ticks if start < t < end]
+    # With the GIL held the counter would stall for the whole call.
+    assert len(during) >= 0.3 * (end - start) / 0.0011
+    assert result.mesh.face_count == cage.corner_count * 4 ** 3
