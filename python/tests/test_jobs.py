@@ -114,3 +114,18 @@ def test_long_calls_release_the_gil():
     # With the GIL held the counter would stall for the whole call.
     assert len(during) >= 0.3 * (end - start) / 0.0011
     assert result.mesh.face_count == cage.corner_count * 4 ** 3
+
+
+def test_the_worked_example_in_the_docs_runs(tmp_path, monkeypatch):
+    import pathlib
+    import re
+
+    doc = pathlib.Path(__file__).parents[2] / "docs" / "python.md"
+    blocks = re.findall(r"```python\n(.*?)```", doc.read_text(), re.S)
+    assert blocks
+    monkeypatch.chdir(tmp_path)
+    for code in blocks:
+        exec(compile(code, str(doc), "exec"), {})
+    cage = limn.read_mesh(tmp_path / "cage.obj")
+    assert 0 < cage.face_count <= 60 * 4
+    assert limn.info(limn.read_mesh(tmp_path / "smooth.obj"))["manifold"]

@@ -129,3 +129,21 @@ def test_bad_files_raise_the_cli_message(tmp_path, cli):
     assert not (tmp_path / "out.xyz").exists()
     with pytest.raises(limn.InputError, match="unknown shape"):
         limn.shape("teapot")
+
+
+def test_the_stub_names_what_the_module_has():
+    import ast
+    import pathlib
+
+    from limn import _limn
+
+    stub = pathlib.Path(_limn.__file__).with_name("_limn.pyi")
+    tree = ast.parse(stub.read_text())
+    declared = {n.name for n in tree.body if isinstance(n, (ast.FunctionDef, ast.ClassDef))}
+    declared |= {n.target.id for n in tree.body if isinstance(n, ast.AnnAssign)}
+    present = {n for n in dir(_limn) if not n.startswith("__") or n == "__version__"}
+    assert declared == present
+    mesh_stub = next(n for n in tree.body if isinstance(n, ast.ClassDef) and n.name == "Mesh")
+    members = {n.name for n in mesh_stub.body if isinstance(n, ast.FunctionDef)}
+    members |= {n.target.id for n in mesh_stub.body if isinstance(n, ast.AnnAssign)}
+    assert members == {n for n in dir(limn.Mesh) if not n.startswith("_")} | {"__init__"}
