@@ -5,6 +5,7 @@
 
 #include <optional>
 
+#include "../common/render_job.hpp"
 #include "gl_commands.hpp"
 #include "limn/paint/file.hpp"
 #include "limn/render/draw.hpp"
@@ -15,70 +16,71 @@ namespace limn::cli {
 
 LIMN_GL_ENTRY void limn_cli_render(const RenderJob& job) {
   const int w = job.width, h = job.height;
-  const float* bg = job.clear_color;
   Stopwatch sw;
   const Mesh mesh = read_input(job.mesh, job.format, job.weld);
   std::optional<OctreeTexture> texture;
   if (!job.texture.empty()) texture = load_lot(job.texture);
   nlohmann::json timings = {{"read", sw.lap()}};
-  GlContext gl;
-  timings["context"] = sw.lap();
-  std::optional<GpuOctreeTexture> gpu_texture;
-  if (texture) gpu_texture.emplace(*texture);
-  RenderTarget target(w, h, job.samples);
-  DrawOptions d;
-  d.outline = job.wireframe;
-  d.depth_colors = job.a.depth_colors;
-  d.pixels_per_segment = job.pps;
-  d.factor = job.fixed_tess ? job.a.tess : 0;
-  d.texture = gpu_texture ? &*gpu_texture : nullptr;
-  d.texture_nearest = job.nearest;
-  d.uv_checker = job.uv_checker;
-  if (d.uv_checker > 0 && mesh.uv_indices.empty())
-    throw InputError(fmt::format("{}: --uv-checker: the mesh has no UVs", job.mesh));
-  DrawStats st;
-  nlohmann::json patches = nullptr;
-  Camera cam;
+  nlohmann::json report;
+  std::vector<uint8_t> rgba;
   if (job.adaptive) {
+    GlContext gl;
+    timings["context"] = sw.lap();
+    std::optional<GpuOctreeTexture> gpu_texture;
+    if (texture) gpu_texture.emplace(*texture);
+    RenderTarget target(w, h, job.samples);
+    DrawOptions d;
+    d.outline = job.wireframe;
+    d.depth_colors = job.a.depth_colors;
+    d.pixels_per_segment = job.pps;
+    d.factor = job.fixed_tess ? job.a.tess : 0;
+    d.texture = gpu_texture ? &*gpu_texture : nullptr;
+    d.texture_nearest = job.nearest;
+    d.uv_checker = job.uv_checker;
+    if (d.uv_checker > 0 && mesh.uv_indices.empty())
+      throw InputError(fmt::format("{}: --uv-checker: the mesh has no UVs", job.mesh));
     const AdaptiveSurface surf = build_adaptive(mesh, job.a, w, h, sw, timings);
-    cam = surf.cam;
     PatchDrawer drawer(mesh, surf.table, surf.points);
     timings["upload"] = sw.lap();
-    target.begin(bg);
-    st = drawer.draw(cam, d);
-    patches = {{"regular", surf.table.regular_params.size()},
-               {"gregory", surf.table.gregory_params.size()}};
+    target.begin(job.clear_color);
+    const DrawStats st = drawer.draw(surf.cam, d);
+    rgba = target.read_rgba();
+    report = {{"renderer", gl.renderer()},
+              {"resolution", {w, h}},
+              {"camera", jobs::camera_json(surf.cam)},
+              {"drawn", st.patches},
+              {"patches",
+               {{"regular", surf.table.regular_params.size()},
+                {"gregory", surf.table.gregory_params.size()}}},
+              {"triangles", st.triangles},
+              {"gpu_ms", st.gpu_ms},
+              {"cpu_draw_ms", st.cpu_ms}};
   } else {
-    cam = frame_camera(mesh, w, h);
-    if (!job.a.camera.empty()) cam = parse_camera(job.a.camera, cam);
-    MeshDrawer drawer(mesh, {}, job.flat);
-    timings["upload"] = sw.lap();
-    target.begin(bg);
-    st = drawer.draw(cam, d);
+    jobs::MeshRender r;
+    r.width = w, r.height = h, r.samples = job.samples;
+    std::copy(job.clear_color, job.clear_color + 4, r.background);
+    if (!job.a.camera.empty()) r.camera = parse_camera(job.a.camera, Camera{});
+    r.flat = job.flat, r.wireframe = job.wireframe, r.uv_checker = job.uv_checker;
+    r.texture = texture ? &*texture : nullptr;
+    r.nearest = job.nearest;
+    jobs::RenderedImage image = jobs::render_mesh(mesh, r, job.mesh, jobs::Names::cli);
+    rgba = std::move(image.rgba);
+    report = std::move(image.report);
+    report["patches"] = nullptr;
   }
   timings["draw"] = sw.lap();
-  write_png(job.out, w, h, target.read_rgba());
+  write_png(job.out, w, h, rgba);
   timings["write"] = sw.lap();
   if (job.json) {
-    nlohmann::json j = {{"input", job.mesh},
-                        {"output", job.out},
-                        {"renderer", gl.renderer()},
-                        {"texture", texture ? nlohmann::json(job.texture) : nlohmann::json()},
-                        {"resolution", {w, h}},
-                        {"camera",
-                         {{"eye", {cam.eye[0], cam.eye[1], cam.eye[2]}},
-                          {"target", {cam.target[0], cam.target[1], cam.target[2]}},
-                          {"fovy_deg", cam.fovy_deg}}},
-                        {"drawn", st.patches},
-                        {"patches", patches},
-                        {"triangles", st.triangles},
-                        {"gpu_ms", st.gpu_ms},
-                        {"cpu_draw_ms", st.cpu_ms},
-                        {"timings_ms", timings}};
-    fmt::print("{}\n", j.dump(2));
+    report["input"] = job.mesh;
+    report["output"] = job.out;
+    report["texture"] = texture ? nlohmann::json(job.texture) : nlohmann::json();
+    report["timings_ms"] = timings;
+    fmt::print("{}\n", report.dump(2));
   } else {
     fmt::print("{} -> {}: {} {} drawn, {} triangles, {}x{} ({:.1f} ms)\n", job.mesh, job.out,
-               st.patches, job.adaptive ? "patches" : "polygons", st.triangles, w, h, sw.ms());
+               report["drawn"].get<size_t>(), job.adaptive ? "patches" : "polygons",
+               report["triangles"].get<uint64_t>(), w, h, sw.ms());
   }
 }
 

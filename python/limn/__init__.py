@@ -20,13 +20,14 @@ from typing import Any, Optional
 
 import numpy as np
 
-from ._limn import (InputError, Mesh, RepairableError, __version__, read_mesh, shape,
+from ._limn import (InputError, Mesh, RepairableError, __version__, read_mesh, read_png, shape,
                     shape_names)
 from . import _limn
 
 __all__ = [
     "InputError",
     "Mesh",
+    "RenderResult",
     "RepairResult",
     "RepairableError",
     "SimplifyResult",
@@ -34,12 +35,15 @@ __all__ = [
     "__version__",
     "info",
     "read_mesh",
+    "read_png",
+    "render",
     "repair",
     "shape",
     "shape_names",
     "simplify",
     "subdivide",
     "write_mesh",
+    "write_png",
 ]
 
 
@@ -140,3 +144,51 @@ def subdivide(mesh: Mesh, *, uniform: int, limit: bool = False) -> SubdivideResu
     """
     out, stats = _limn._subdivide_uniform(mesh, int(uniform), bool(limit))
     return SubdivideResult(out, stats)
+
+
+@dataclasses.dataclass
+class RenderResult:
+    """image: (h, w, 4) uint8 RGBA, rows top to bottom. stats: ``limn render --json``'s report
+    (renderer, camera, polygons drawn, triangles, GPU and CPU ms)."""
+    image: np.ndarray
+    stats: dict[str, Any]
+
+
+def _camera_numbers(camera) -> Optional[list[float]]:
+    if camera is None:
+        return None
+    if isinstance(camera, dict):  # the form a report gives back
+        return [*camera["eye"], *camera["target"], camera["fovy_deg"]]
+    return [float(x) for x in camera]
+
+
+def render(mesh: Mesh, *, resolution: tuple[int, int] | str = (1280, 720),
+           camera=None, background=(1.0, 1.0, 1.0), samples: int = 4, flat: bool = False,
+           wireframe: bool = False, uv_checker: float = 0.0) -> RenderResult:
+    """``limn render MESH``: the mesh drawn headless (EGL; Mesa's llvmpipe without a GPU).
+
+    resolution: (width, height) or "WxH". camera: (ex, ey, ez, tx, ty, tz, fovy_deg) or a
+    report's ``{"eye", "target", "fovy_deg"}`` (default: the whole mesh framed). background:
+    RGB or RGBA in [0, 1]. samples: multisampling 1-16. flat: one normal per polygon.
+    wireframe: polygon edges. uv_checker: the mesh's UVs as a checker of N squares per unit.
+    """
+    if isinstance(resolution, str):
+        try:
+            width, height = (int(v) for v in resolution.lower().split("x"))
+        except ValueError:
+            raise InputError(f"resolution {resolution}: expected WxH") from None
+    else:
+        width, height = resolution
+    bg = [float(c) for c in background]
+    if len(bg) == 3:
+        bg.append(1.0)
+    if len(bg) != 4 or not all(0.0 <= c <= 1.0 for c in bg):
+        raise InputError(f"background {background}: three or four numbers 0-1")
+    image, stats = _limn._render_mesh(mesh, int(width), int(height), int(samples), bg,
+                                      _camera_numbers(camera), flat, wireframe, float(uv_checker))
+    return RenderResult(image, stats)
+
+
+def write_png(path: str | os.PathLike, image: np.ndarray) -> None:
+    """Writes an (h, w, 4) uint8 RGBA image as a PNG, atomically."""
+    _limn._write_png(os.fspath(path), image)

@@ -12,7 +12,8 @@ namespace py = pybind11;
 /// A JSON report as Python objects (dict, list, str, int, float, bool, None).
 py::object to_python(const nlohmann::json& j);
 
-void bind_mesh(py::module_& m);  ///< Mesh, read_mesh, _write_mesh, _info
-void bind_jobs(py::module_& m);  ///< _simplify, _subdivide_uniform, _repair
+void bind_mesh(py::module_& m);    ///< Mesh, read_mesh, _write_mesh, _info
+void bind_jobs(py::module_& m);    ///< _simplify, _subdivide_uniform, _repair
+void bind_render(py::module_& m);  ///< _render_mesh, read_png, _write_png
 
 }  // namespace limn::py_bind

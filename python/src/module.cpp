@@ -35,4 +35,5 @@ PYBIND11_MODULE(_limn, m) {
   });
   limn::py_bind::bind_mesh(m);
   limn::py_bind::bind_jobs(m);
+  limn::py_bind::bind_render(m);
 }

@@ -129,3 +129,5 @@ def test_the_worked_example_in_the_docs_runs(tmp_path, monkeypatch):
     cage = limn.read_mesh(tmp_path / "cage.obj")
     assert 0 < cage.face_count <= 60 * 4
     assert limn.info(limn.read_mesh(tmp_path / "smooth.obj"))["manifold"]
+    for name in ("scan", "cage", "smooth"):
+        assert limn.read_png(tmp_path / f"{name}.png").shape == (300, 480, 4)

@@ -1,0 +1,40 @@
+// `limn render MESH` (without --adaptive) on a mesh in memory: the image as RGBA8 pixels, shared
+// by the CLI's GL module and the Python module so both draw the same pixels.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <vector>
+
+#include "jobs.hpp"
+#include "limn/mesh/mesh.hpp"
+#include "limn/paint/texture.hpp"
+#include "limn/subdiv/depth.hpp"
+
+namespace limn::jobs {
+
+struct MeshRender {
+  int width = 1280, height = 720, samples = 4;
+  float background[4] = {1, 1, 1, 1};
+  std::optional<Camera> camera;  ///< eye, target, fovy (the image size is set here); none: framed
+  bool flat = false, wireframe = false;
+  float uv_checker = 0;                    ///< squares per UV unit; 0: off
+  const OctreeTexture* texture = nullptr;  ///< colour from a painted texture
+  bool nearest = false;                    ///< texture: nearest texel, not filtered
+};
+
+struct RenderedImage {
+  std::vector<uint8_t> rgba;  ///< rows top to bottom
+  Camera camera;              ///< the camera drawn from
+  nlohmann::json report;      ///< renderer, polygons drawn, triangles, GPU and CPU ms, camera
+};
+
+/// Draws `mesh` headless (EGL; llvmpipe without a GPU). InputError for the UV checker on a mesh
+/// without UVs; std::runtime_error when no OpenGL 4.5 context can be made.
+RenderedImage render_mesh(const Mesh& mesh, const MeshRender& options, std::string_view name,
+                          Names names);
+
+/// A camera's report: eye, target, fovy_deg.
+nlohmann::json camera_json(const Camera& c);
+
+}  // namespace limn::jobs

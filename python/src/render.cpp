@@ -1,0 +1,94 @@
+// Headless images as numpy arrays (the render layer through apps/common/render_job), and PNGs.
+#include <fmt/format.h>
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <array>
+#include <cmath>
+
+#include "arrays.hpp"
+#include "bindings.hpp"
+#include "limn/render/image.hpp"
+#include "render_job.hpp"
+
+namespace limn::py_bind {
+
+namespace {
+
+// An (h, w, 4) uint8 array owning the pixels (moved, not copied).
+py::array_t<uint8_t> image_array(std::vector<uint8_t>&& rgba, int width, int height) {
+  auto* heap = new std::vector<uint8_t>(std::move(rgba));
+  py::capsule free_it(heap, [](void* p) { delete static_cast<std::vector<uint8_t>*>(p); });
+  return py::array_t<uint8_t>({py::ssize_t(height), py::ssize_t(width), py::ssize_t(4)},
+                              {py::ssize_t(4 * width), py::ssize_t(4), py::ssize_t(1)},
+                              heap->data(), free_it);
+}
+
+}  // namespace
+
+void bind_render(py::module_& m) {
+  m.def(
+      "_render_mesh",
+      [](const Mesh& mesh, int width, int height, int samples, std::array<float, 4> background,
+         std::optional<std::array<float, 7>> camera, bool flat, bool wireframe, float uv_checker) {
+        jobs::MeshRender r;
+        if (width < 1 || height < 1 || width > 16384 || height > 16384)
+          throw InputError(
+              fmt::format("resolution {}x{}: each side must be 1-16384", width, height));
+        if (samples < 1 || samples > 16)
+          throw InputError(fmt::format("samples {}: must be 1-16", samples));
+        if (!(uv_checker >= 0 && uv_checker <= 1024))
+          throw InputError(fmt::format("uv_checker {}: squares per UV unit, 0-1024", uv_checker));
+        r.width = width, r.height = height, r.samples = samples;
+        std::copy(background.begin(), background.end(), r.background);
+        if (camera) {
+          const std::array<float, 7>& c = *camera;
+          for (float x : c)
+            if (!std::isfinite(x)) throw InputError("camera: not finite");
+          if (!(c[6] > 0 && c[6] < 180))
+            throw InputError(fmt::format("camera: fovy_deg {} must be in (0, 180)", c[6]));
+          Camera cam;
+          for (int k = 0; k < 3; ++k) cam.eye[k] = c[size_t(k)], cam.target[k] = c[size_t(k) + 3];
+          cam.fovy_deg = c[6];
+          r.camera = cam;
+        }
+        r.flat = flat, r.wireframe = wireframe, r.uv_checker = uv_checker;
+        jobs::RenderedImage image;
+        {
+          py::gil_scoped_release unlocked;
+          image = jobs::render_mesh(mesh, r, "mesh", jobs::Names::python);
+        }
+        return py::make_tuple(image_array(std::move(image.rgba), width, height),
+                              to_python(image.report));
+      },
+      py::arg("mesh"), py::arg("width"), py::arg("height"), py::arg("samples"),
+      py::arg("background"), py::arg("camera"), py::arg("flat"), py::arg("wireframe"),
+      py::arg("uv_checker"));
+  m.def(
+      "read_png",
+      [](const std::filesystem::path& path) {
+        int w = 0, h = 0;
+        std::vector<uint8_t> rgba;
+        {
+          py::gil_scoped_release unlocked;
+          rgba = read_png(path, w, h);
+        }
+        return image_array(std::move(rgba), w, h);
+      },
+      py::arg("path"), "A PNG as an (h, w, 4) uint8 array, rows top to bottom.");
+  m.def(
+      "_write_png",
+      [](const std::filesystem::path& path,
+         py::array_t<uint8_t, py::array::c_style | py::array::forcecast> image) {
+        if (image.ndim() != 3 || image.shape(2) != 4)
+          throw InputError("image: expected shape (h, w, 4) uint8 (RGBA)");
+        const int h = int(image.shape(0)), w = int(image.shape(1));
+        std::span<const uint8_t> px(image.data(), size_t(image.size()));
+        py::gil_scoped_release unlocked;
+        write_png(path, w, h, px);
+      },
+      py::arg("path"), py::arg("image"));
+}
+
+}  // namespace limn::py_bind
