@@ -6,6 +6,10 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
+
+#include "limn/paint/brush.hpp"
 #include "limn/simplify/distance.hpp"
 #include "limn/simplify/validate.hpp"
 #include "limn/subdiv/refine.hpp"
@@ -197,6 +201,59 @@ UniformOutcome subdivide_uniform(const Mesh& cage, int level, bool limit, std::s
                       {"stencil_entries", k == 0 ? 0 : r.stencils[k - 1].indices.size()}});
   }
   return result;
+}
+
+PaintOutcome paint(const Mesh& mesh, const StrokeScript& script, Rgba8 background,
+                   std::optional<OctreeTexture> start) {
+  Laps laps;
+  const PaintSurface surface(mesh);
+  const double t_surface = laps.lap();
+  PaintOutcome out{start ? std::move(*start) : OctreeTexture::create(surface, background), {}};
+  OctreeTexture& tex = out.texture;
+  const double t_create = laps.lap();
+  PaintHistory history;
+  const ScriptResult r = run_strokes(tex, surface, script, history);
+  const double t_paint = laps.lap();
+  // Compact: no free blocks, each subtree in one stretch of the pool (the undo history ends
+  // here anyway).
+  history.clear();
+  tex.compact();
+  size_t dabs = 0, missed = 0, changed = 0, leaves = 0, bricks = 0, rays = 0, tasks = 0,
+         threaded = 0;
+  double stroke_ms = 0;
+  for (const StrokeStats& s : r.strokes) {
+    dabs += s.dabs, missed += s.dabs_missed, changed += s.samples_changed;
+    leaves += s.leaves_created, bricks += s.bricks_created, rays += s.rays, stroke_ms += s.ms;
+    tasks += s.tasks, threaded += s.tasks_threaded;
+  }
+  nlohmann::json picks = nlohmann::json::array();
+  for (const PickResult& p : r.picks)
+    picks.push_back({{"entry", p.command},
+                     {"found", p.found},
+                     {"rgba", {p.rgba[0], p.rgba[1], p.rgba[2], p.rgba[3]}}});
+  out.report = {
+      {"entries", script.commands.size()},
+      {"strokes", r.strokes.size()},
+      {"dabs", dabs},
+      {"dabs_missed", missed},
+      {"samples_changed", changed},
+      {"leaves_created", leaves},
+      {"bricks_created", bricks},
+      {"occlusion_rays", rays},
+      {"ms_per_dab", dabs ? stroke_ms / double(dabs) : 0.0},
+      // Task cells the dabs visited, and of them those on TBB's threads.
+      {"threads",
+       {{"max",
+         std::min(size_t(tbb::this_task_arena::max_concurrency()),
+                  tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism))},
+        {"task_cells", tasks},
+        {"task_cells_threaded", threaded}}},
+      {"undos", r.undos},
+      {"redos", r.redos},
+      {"picks", picks},
+      {"texture", reports::texture_json(tex)},
+      {"timings_ms", {{"surface_bvh", t_surface}, {"texture", t_create}, {"paint", t_paint}}}};
+  return out;
 }
 
 }  // namespace limn::jobs

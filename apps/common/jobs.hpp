@@ -9,6 +9,7 @@
 #include <string_view>
 
 #include "limn/mesh/mesh.hpp"
+#include "limn/paint/strokes.hpp"
 #include "limn/simplify/vsa.hpp"
 
 namespace limn::jobs {
@@ -56,5 +57,17 @@ struct UniformOutcome {
 /// InputError for a level outside 0-8 or an output past limn's size cap.
 UniformOutcome subdivide_uniform(const Mesh& cage, int level, bool limit, std::string_view name,
                                  Names names);
+
+/// `limn paint`: a stroke script run on `mesh` into `start` (continued) or a new texture with
+/// `background`. The texture comes back compact (free blocks dropped, the undo history ended).
+struct PaintOutcome {
+  OctreeTexture texture;
+  /// entries, strokes, dabs (missed), samples changed, leaves and bricks created, occlusion rays,
+  /// ms per dab, threads, undos, redos, picks, the texture's stats, timings of the surface BVH,
+  /// the texture and the painting
+  nlohmann::json report;
+};
+PaintOutcome paint(const Mesh& mesh, const StrokeScript& script, Rgba8 background,
+                   std::optional<OctreeTexture> start);
 
 }  // namespace limn::jobs

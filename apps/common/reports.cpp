@@ -64,6 +64,26 @@ nlohmann::json repair_json(const RepairReport& r) {
           {"closed_components", r.closed_components}};
 }
 
+nlohmann::json texture_json(const OctreeTexture& t) {
+  const OctreeTextureStats s = t.stats();
+  return {
+      {"nodes", s.nodes},
+      {"general_nodes", s.general_nodes},
+      {"bricks", s.bricks},
+      {"leaves", s.leaf_cells},
+      {"double_sided_leaves", s.double_cells},
+      {"samples", s.samples},
+      {"painted_samples", s.painted_samples},
+      {"max_depth", s.max_depth},
+      {"leaves_at_max_depth", s.leaves_at_depth},
+      {"bytes", s.bytes},
+      {"pool_words", s.pool_words},
+      {"free_words", s.free_words},
+      {"free_blocks", t.free_blocks().size()},
+      {"bytes_per_painted_texel", s.bytes_per_painted_texel},
+      {"cube", {{"origin", {t.origin()[0], t.origin()[1], t.origin()[2]}}, {"size", t.size()}}}};
+}
+
 nlohmann::json simplify_json(const Mesh& input, const VsaOptions& options, const VsaResult& r) {
   using nlohmann::json;
   const VsaStats& st = r.stats;

@@ -6,6 +6,7 @@
 
 #include "limn/mesh/repair.hpp"
 #include "limn/mesh/topology.hpp"
+#include "limn/paint/texture.hpp"
 #include "limn/simplify/distance.hpp"
 #include "limn/simplify/vsa.hpp"
 
@@ -13,6 +14,9 @@ namespace limn::reports {
 
 /// `limn info`'s statistics of a mesh.
 nlohmann::json stats_json(const MeshStats& s);
+
+/// An octree texture's counts and sizes (`limn paint --stats`).
+nlohmann::json texture_json(const OctreeTexture& t);
 
 /// The counts of a repair (`limn repair`, `--repair`).
 nlohmann::json repair_json(const RepairReport& r);

@@ -1,16 +1,14 @@
 // limn paint: runs a stroke script (docs/paint-strokes.md) on a mesh into an adaptive octree
 // texture (.lot), or prints a texture's counts and sizes (--stats).
 #include <fmt/format.h>
-#include <tbb/global_control.h>
-#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <sstream>
 
+#include "../common/jobs.hpp"
 #include "common.hpp"
-#include "limn/paint/brush.hpp"
 #include "limn/paint/file.hpp"
 #include "limn/paint/strokes.hpp"
 
@@ -41,26 +39,6 @@ void check_folder(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::is_directory(dir, ec))
     throw InputError(fmt::format("{}: the output folder {} does not exist", path, dir.string()));
-}
-
-nlohmann::json texture_json(const OctreeTexture& t) {
-  const OctreeTextureStats s = t.stats();
-  return {
-      {"nodes", s.nodes},
-      {"general_nodes", s.general_nodes},
-      {"bricks", s.bricks},
-      {"leaves", s.leaf_cells},
-      {"double_sided_leaves", s.double_cells},
-      {"samples", s.samples},
-      {"painted_samples", s.painted_samples},
-      {"max_depth", s.max_depth},
-      {"leaves_at_max_depth", s.leaves_at_depth},
-      {"bytes", s.bytes},
-      {"pool_words", s.pool_words},
-      {"free_words", s.free_words},
-      {"free_blocks", t.free_blocks().size()},
-      {"bytes_per_painted_texel", s.bytes_per_painted_texel},
-      {"cube", {{"origin", {t.origin()[0], t.origin()[1], t.origin()[2]}}, {"size", t.size()}}}};
 }
 
 void run_stats(const PaintOpts& o) {
@@ -95,76 +73,34 @@ void run_paint(const PaintOpts& o) {
   const double t_read = sw.lap();
   const StrokeScript script = read_strokes(o.strokes, o.depth);
   const double t_parse = sw.lap();
-  const PaintSurface surface(mesh);
-  const double t_surface = sw.lap();
-  OctreeTexture tex =
-      o.texture.empty() ? OctreeTexture::create(surface, background) : load_lot(o.texture);
-  const double t_create = sw.lap();
-  PaintHistory history;
-  const ScriptResult r = run_strokes(tex, surface, script, history);
-  const double t_paint = sw.lap();
-  // Saved compact: no free blocks, each subtree in one stretch of the pool (the undo history
-  // ends with this run anyway).
-  history.clear();
-  tex.compact();
+  std::optional<OctreeTexture> start;
+  if (!o.texture.empty()) start = load_lot(o.texture);
+  jobs::PaintOutcome painted = jobs::paint(mesh, script, background, std::move(start));
+  const OctreeTexture& tex = painted.texture;
+  sw.lap();
   save_lot(tex, o.out);
   const double t_save = sw.lap();
-
-  size_t dabs = 0, missed = 0, changed = 0, leaves = 0, bricks = 0, rays = 0, tasks = 0,
-         threaded = 0;
-  double stroke_ms = 0;
-  for (const StrokeStats& s : r.strokes) {
-    dabs += s.dabs, missed += s.dabs_missed, changed += s.samples_changed;
-    leaves += s.leaves_created, bricks += s.bricks_created, rays += s.rays, stroke_ms += s.ms;
-    tasks += s.tasks, threaded += s.tasks_threaded;
-  }
+  const nlohmann::json& report = painted.report;
   if (o.json) {
-    nlohmann::json picks = nlohmann::json::array();
-    for (const PickResult& p : r.picks)
-      picks.push_back({{"entry", p.command},
-                       {"found", p.found},
-                       {"rgba", {p.rgba[0], p.rgba[1], p.rgba[2], p.rgba[3]}}});
-    nlohmann::json j = {{"input", o.mesh},
-                        {"repair", repaired},
-                        {"strokes_file", o.strokes},
-                        {"output", o.out},
-                        {"depth", o.depth},
-                        {"entries", script.commands.size()},
-                        {"strokes", r.strokes.size()},
-                        {"dabs", dabs},
-                        {"dabs_missed", missed},
-                        {"samples_changed", changed},
-                        {"leaves_created", leaves},
-                        {"bricks_created", bricks},
-                        {"occlusion_rays", rays},
-                        {"ms_per_dab", dabs ? stroke_ms / double(dabs) : 0.0},
-                        // Task cells the dabs visited, and of them those on TBB's threads.
-                        {"threads",
-                         {{"max", std::min(size_t(tbb::this_task_arena::max_concurrency()),
-                                           tbb::global_control::active_value(
-                                               tbb::global_control::max_allowed_parallelism))},
-                          {"task_cells", tasks},
-                          {"task_cells_threaded", threaded}}},
-                        {"undos", r.undos},
-                        {"redos", r.redos},
-                        {"picks", picks},
-                        {"texture", texture_json(tex)},
-                        {"timings_ms",
-                         {{"read_mesh", t_read},
-                          {"read_strokes", t_parse},
-                          {"surface_bvh", t_surface},
-                          {"texture", t_create},
-                          {"paint", t_paint},
-                          {"save", t_save},
-                          {"total", sw.ms()}}}};
+    nlohmann::json j = report;
+    j["input"] = o.mesh;
+    j["repair"] = repaired;
+    j["strokes_file"] = o.strokes;
+    j["output"] = o.out;
+    j["depth"] = o.depth;
+    j["timings_ms"]["read_mesh"] = t_read;
+    j["timings_ms"]["read_strokes"] = t_parse;
+    j["timings_ms"]["save"] = t_save;
+    j["timings_ms"]["total"] = sw.ms();
     fmt::print("{}\n", j.dump(2));
   } else {
     const OctreeTextureStats st = tex.stats();
     fmt::print(
         "{} -> {}: {} strokes, {} dabs ({} missed the surface), {} samples changed; texture max "
         "depth {}, {} leaves, {} bytes ({:.2f} per painted texel); {:.0f} ms in all\n",
-        o.mesh, o.out, r.strokes.size(), dabs, missed, changed, st.max_depth, st.leaf_cells,
-        st.bytes, st.bytes_per_painted_texel, sw.ms());
+        o.mesh, o.out, report["strokes"].get<size_t>(), report["dabs"].get<size_t>(),
+        report["dabs_missed"].get<size_t>(), report["samples_changed"].get<size_t>(), st.max_depth,
+        st.leaf_cells, st.bytes, st.bytes_per_painted_texel, sw.ms());
   }
 }
 

@@ -15,6 +15,7 @@ namespace limn::cli {
 
 using reports::repair_json;
 using reports::stats_json;
+using reports::texture_json;
 
 void add_info(CLI::App& app);
 void add_convert(CLI::App& app);
