@@ -14,26 +14,32 @@ a function with keyword arguments named like the command's options, returning th
 from __future__ import annotations
 
 import dataclasses
+import json
 import os
 import warnings
 from typing import Any, Optional
 
 import numpy as np
 
-from ._limn import (InputError, Mesh, RepairableError, __version__, read_mesh, read_png, shape,
-                    shape_names)
+from ._limn import (InputError, Mesh, RepairableError, Texture, __version__, load_texture,
+                    read_mesh, read_png, shape, shape_names)
 from . import _limn
 
 __all__ = [
     "InputError",
     "Mesh",
+    "PaintResult",
     "RenderResult",
     "RepairResult",
     "RepairableError",
     "SimplifyResult",
     "SubdivideResult",
+    "Texture",
     "__version__",
+    "bake",
     "info",
+    "load_texture",
+    "paint",
     "read_mesh",
     "read_png",
     "render",
@@ -164,13 +170,15 @@ def _camera_numbers(camera) -> Optional[list[float]]:
 
 def render(mesh: Mesh, *, resolution: tuple[int, int] | str = (1280, 720),
            camera=None, background=(1.0, 1.0, 1.0), samples: int = 4, flat: bool = False,
-           wireframe: bool = False, uv_checker: float = 0.0) -> RenderResult:
+           wireframe: bool = False, uv_checker: float = 0.0, texture: Optional[Texture] = None,
+           nearest: bool = False) -> RenderResult:
     """``limn render MESH``: the mesh drawn headless (EGL; Mesa's llvmpipe without a GPU).
 
     resolution: (width, height) or "WxH". camera: (ex, ey, ez, tx, ty, tz, fovy_deg) or a
     report's ``{"eye", "target", "fovy_deg"}`` (default: the whole mesh framed). background:
     RGB or RGBA in [0, 1]. samples: multisampling 1-16. flat: one normal per polygon.
     wireframe: polygon edges. uv_checker: the mesh's UVs as a checker of N squares per unit.
+    texture: colour from a painted octree texture (nearest: nearest texel, not filtered).
     """
     if isinstance(resolution, str):
         try:
@@ -185,10 +193,73 @@ def render(mesh: Mesh, *, resolution: tuple[int, int] | str = (1280, 720),
     if len(bg) != 4 or not all(0.0 <= c <= 1.0 for c in bg):
         raise InputError(f"background {background}: three or four numbers 0-1")
     image, stats = _limn._render_mesh(mesh, int(width), int(height), int(samples), bg,
-                                      _camera_numbers(camera), flat, wireframe, float(uv_checker))
+                                      _camera_numbers(camera), flat, wireframe, float(uv_checker),
+                                      texture, nearest)
     return RenderResult(image, stats)
 
 
 def write_png(path: str | os.PathLike, image: np.ndarray) -> None:
     """Writes an (h, w, 4) uint8 RGBA image as a PNG, atomically."""
     _limn._write_png(os.fspath(path), image)
+
+
+@dataclasses.dataclass
+class PaintResult:
+    """The painted texture, and ``stats``: ``limn paint --json``'s report (strokes, dabs, samples
+    changed, leaves and bricks created, picks, the texture's sizes, timings)."""
+    texture: Texture
+    stats: dict[str, Any]
+
+
+def _jsonable(value):
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, (np.floating, np.integer)):
+        return value.item()
+    if isinstance(value, dict):
+        return {k: _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    return value
+
+
+def paint(mesh: Mesh, strokes, *, depth: int = 10, texture: Optional[Texture] = None,
+          background=(0.0, 0.0, 0.0, 0.0)) -> PaintResult:
+    """``limn paint``: runs a stroke script on ``mesh`` into a new octree texture (or a copy of
+    ``texture``, continued).
+
+    strokes: the script as docs/paint-strokes.md describes it: a dict (``{"strokes": [...]}``,
+    numpy arrays allowed for points), its JSON text, or the path of a JSON file. depth: the leaf
+    level of entries that give none (1-16; 10 is 1024^3 over the mesh's bounding cube).
+    background: RGB(A) in [0, 1] of unpainted surface in a new texture.
+    """
+    if isinstance(strokes, os.PathLike) or (isinstance(strokes, str)
+                                            and not strokes.lstrip().startswith(("{", "["))):
+        name = os.fspath(strokes)
+        with open(name, encoding="utf-8") as f:
+            text = f.read()
+    elif isinstance(strokes, str):
+        name, text = "strokes", strokes
+    else:
+        name, text = "strokes", json.dumps(_jsonable(strokes))
+    bg = [float(c) for c in background]
+    if len(bg) == 3:
+        bg.append(1.0)
+    if len(bg) != 4:
+        raise InputError(f"background {background}: expected r,g,b[,a] in [0, 1]")
+    out, stats = _limn._paint(mesh, text, name, int(depth), bg, texture)
+    return PaintResult(out, stats)
+
+
+def bake(texture: Texture, mesh: Mesh, *, uv: bool = False, size: int = 1024,
+         resolution: Optional[tuple[int, int]] = None, gutter: int = 8,
+         nearest: bool = False) -> np.ndarray:
+    """``limn bake``: the texture as RGBA per vertex ((n, 4) float32, the lookup at each vertex
+    along its normal), or with ``uv=True`` into the mesh's UV layout as an (h, w, 4) uint8 image
+    (``size`` square or ``resolution`` (w, h); ``gutter`` pixels of dilation around charts).
+    nearest: nearest texels instead of the filtered colour the renderer shows.
+    """
+    if not uv:
+        return _limn._bake_vertex_colors(texture, mesh, nearest)
+    width, height = resolution if resolution is not None else (size, size)
+    return _limn._bake_uv_image(texture, mesh, int(width), int(height), int(gutter), nearest)

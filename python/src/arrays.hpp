@@ -26,6 +26,17 @@ py::array_t<T> view(std::vector<T>& v, size_t cols, py::handle owner) {
   return py::array_t<T>(shape, strides, v.data(), owner);
 }
 
+/// A numpy array that takes over `v` (moved, not copied; freed with the array), shaped `shape`
+/// (C order; the product must be v.size()).
+template <class T>
+py::array_t<T> owned(std::vector<T>&& v, std::vector<py::ssize_t> shape) {
+  auto* heap = new std::vector<T>(std::move(v));
+  py::capsule free_it(heap, [](void* p) { delete static_cast<std::vector<T>*>(p); });
+  std::vector<py::ssize_t> strides(shape.size(), py::ssize_t(sizeof(T)));
+  for (size_t k = shape.size() - 1; k-- > 0;) strides[k] = strides[k + 1] * shape[k + 1];
+  return py::array_t<T>(shape, strides, heap->data(), free_it);
+}
+
 /// `obj` (any array-like of numbers) as floats shaped (n, cols), or (n,) when cols is 0, copied.
 /// TypeError for non-numbers; limn.InputError (ValueError) naming `what` for a wrong shape or a
 /// value that is not finite.

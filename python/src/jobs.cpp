@@ -10,19 +10,6 @@
 
 namespace limn::py_bind {
 
-namespace {
-
-// A vector moved into a numpy array that owns it (no copy).
-template <class T>
-py::array_t<T> owned(std::vector<T>&& v) {
-  auto* heap = new std::vector<T>(std::move(v));
-  py::capsule free_it(heap, [](void* p) { delete static_cast<std::vector<T>*>(p); });
-  return py::array_t<T>({py::ssize_t(heap->size())}, {py::ssize_t(sizeof(T))}, heap->data(),
-                        free_it);
-}
-
-}  // namespace
-
 void bind_jobs(py::module_& m) {
   m.def(
       "_simplify",
@@ -50,8 +37,12 @@ void bind_jobs(py::module_& m) {
           out = jobs::simplify(mesh, job, "mesh");
         }
         SimplifiedMesh& s = out.result.output;
-        return py::make_tuple(std::move(s.mesh), owned(std::move(out.result.labels)),
-                              owned(std::move(s.face_cluster)), owned(std::move(s.vertex_source)),
+        const auto faces_in = py::ssize_t(out.result.labels.size());
+        const auto faces_out = py::ssize_t(s.face_cluster.size());
+        const auto vertices_out = py::ssize_t(s.vertex_source.size());
+        return py::make_tuple(std::move(s.mesh), owned(std::move(out.result.labels), {faces_in}),
+                              owned(std::move(s.face_cluster), {faces_out}),
+                              owned(std::move(s.vertex_source), {vertices_out}),
                               to_python(out.report));
       },
       py::arg("mesh"), py::arg("proxies"), py::arg("target_error"), py::arg("max_proxies"),

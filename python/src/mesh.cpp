@@ -160,6 +160,14 @@ TypeError for arrays of non-numbers.)")
           "sizes are mixed: use face_offsets and face_vertices)")
       .def(
           "copy", [](const Mesh& me) { return Mesh(me); }, "A deep copy.")
+      .def(
+          "vertex_normals",
+          [](const Mesh& me) {
+            std::vector<float> n = vertex_normals(me);
+            const auto rows = py::ssize_t(n.size() / 3);
+            return owned(std::move(n), {rows, 3});
+          },
+          "Area-weighted unit vertex normals, (n, 3) float32 (zero for unreferenced vertices).")
       .def("__repr__", [](const Mesh& me) {
         return fmt::format("<limn.Mesh: {} vertices, {} faces{}{}{}>", me.vertex_count(),
                            me.face_count(), me.uv_indices.empty() ? "" : ", uvs",

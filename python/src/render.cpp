@@ -14,24 +14,12 @@
 
 namespace limn::py_bind {
 
-namespace {
-
-// An (h, w, 4) uint8 array owning the pixels (moved, not copied).
-py::array_t<uint8_t> image_array(std::vector<uint8_t>&& rgba, int width, int height) {
-  auto* heap = new std::vector<uint8_t>(std::move(rgba));
-  py::capsule free_it(heap, [](void* p) { delete static_cast<std::vector<uint8_t>*>(p); });
-  return py::array_t<uint8_t>({py::ssize_t(height), py::ssize_t(width), py::ssize_t(4)},
-                              {py::ssize_t(4 * width), py::ssize_t(4), py::ssize_t(1)},
-                              heap->data(), free_it);
-}
-
-}  // namespace
-
 void bind_render(py::module_& m) {
   m.def(
       "_render_mesh",
       [](const Mesh& mesh, int width, int height, int samples, std::array<float, 4> background,
-         std::optional<std::array<float, 7>> camera, bool flat, bool wireframe, float uv_checker) {
+         std::optional<std::array<float, 7>> camera, bool flat, bool wireframe, float uv_checker,
+         const OctreeTexture* texture, bool nearest) {
         jobs::MeshRender r;
         if (width < 1 || height < 1 || width > 16384 || height > 16384)
           throw InputError(
@@ -54,17 +42,18 @@ void bind_render(py::module_& m) {
           r.camera = cam;
         }
         r.flat = flat, r.wireframe = wireframe, r.uv_checker = uv_checker;
+        r.texture = texture, r.nearest = nearest;
         jobs::RenderedImage image;
         {
           py::gil_scoped_release unlocked;
           image = jobs::render_mesh(mesh, r, "mesh", jobs::Names::python);
         }
-        return py::make_tuple(image_array(std::move(image.rgba), width, height),
+        return py::make_tuple(owned(std::move(image.rgba), {height, width, 4}),
                               to_python(image.report));
       },
       py::arg("mesh"), py::arg("width"), py::arg("height"), py::arg("samples"),
       py::arg("background"), py::arg("camera"), py::arg("flat"), py::arg("wireframe"),
-      py::arg("uv_checker"));
+      py::arg("uv_checker"), py::arg("texture"), py::arg("nearest"));
   m.def(
       "read_png",
       [](const std::filesystem::path& path) {
@@ -74,7 +63,7 @@ void bind_render(py::module_& m) {
           py::gil_scoped_release unlocked;
           rgba = read_png(path, w, h);
         }
-        return image_array(std::move(rgba), w, h);
+        return owned(std::move(rgba), {h, w, 4});
       },
       py::arg("path"), "A PNG as an (h, w, 4) uint8 array, rows top to bottom.");
   m.def(

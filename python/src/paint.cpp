@@ -1,0 +1,173 @@
+// Octree textures for Python: paint (the CLI's stroke scripts), lookups at arrays of points,
+// .lot files, baking, and the texture in renders.
+#include <fmt/format.h>
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include "arrays.hpp"
+#include "bindings.hpp"
+#include "jobs.hpp"
+#include "limn/paint/bake.hpp"
+#include "limn/paint/file.hpp"
+#include "limn/paint/lookup.hpp"
+#include "reports.hpp"
+
+namespace limn::py_bind {
+
+namespace {
+
+// Points (n, 3) and optional normals (n, 3) for lookups.
+struct Queries {
+  std::vector<float> p, n;
+  size_t count = 0;
+};
+Queries queries(py::handle points, py::handle normals) {
+  Queries q;
+  q.p = floats(points, "points", 3);
+  q.count = q.p.size() / 3;
+  if (!normals.is_none()) {
+    q.n = floats(normals, "normals", 3);
+    if (q.n.size() != q.p.size())
+      throw InputError(fmt::format("normals: {} rows for {} points", q.n.size() / 3, q.count));
+  }
+  return q;
+}
+
+}  // namespace
+
+void bind_paint(py::module_& m) {
+  py::class_<OctreeTexture> tex(m, "Texture", R"(An adaptive octree texture (limn paint): colour
+on a surface without UVs, deep only where detail was painted. Made by paint() or load_texture().)");
+  tex.def(
+         "save",
+         [](const OctreeTexture& t, const std::filesystem::path& path) {
+           if (path.extension() != ".lot")
+             throw InputError(
+                 fmt::format("{}: the texture file name must end in .lot", path.string()));
+           py::gil_scoped_release unlocked;
+           save_lot(t, path);
+         },
+         py::arg("path"), "Writes the texture as a .lot file, atomically.")
+      .def_property_readonly(
+          "stats", [](const OctreeTexture& t) { return to_python(reports::texture_json(t)); },
+          "`limn paint --stats --json`: nodes, bricks, leaves, samples, bytes, bytes per painted "
+          "texel, the cube.")
+      .def_property_readonly("background",
+                             [](const OctreeTexture& t) {
+                               const Rgba8 c = t.background();
+                               return py::make_tuple(channel(c, 0), channel(c, 1), channel(c, 2),
+                                                     channel(c, 3));
+                             })
+      .def(
+          "nearest",
+          [](const OctreeTexture& t, py::handle points, py::handle normals) {
+            const Queries q = queries(points, normals);
+            std::vector<uint32_t> rgba(q.count);
+            std::vector<uint8_t> found(q.count);
+            {
+              py::gil_scoped_release unlocked;
+              OctreeSampler sampler(t);
+              sampler.nearest_batch(q.p.data(), q.n.empty() ? nullptr : q.n.data(), q.count,
+                                    rgba.data(), found.data());
+            }
+            std::vector<uint8_t> bytes(4 * q.count);
+            for (size_t i = 0; i < q.count; ++i)
+              for (int k = 0; k < 4; ++k) bytes[4 * i + size_t(k)] = uint8_t(channel(rgba[i], k));
+            return py::make_tuple(
+                owned(std::move(bytes), {py::ssize_t(q.count), 4}),
+                owned(std::move(found), {py::ssize_t(q.count)}).attr("astype")("bool"));
+          },
+          py::arg("points"), py::arg("normals") = py::none(),
+          R"(Nearest lookups: (colors (n, 4) uint8, found (n,) bool) at (n, 3) points.
+
+normals (n, 3), optional: which side of a two-sided leaf to read (see limn/paint/lookup.hpp);
+found is False where no leaf with a sample facing the normal holds the point (colour: the
+background).)")
+      .def(
+          "filtered",
+          [](const OctreeTexture& t, py::handle points, py::handle normals, float footprint) {
+            if (!(footprint >= 0 && std::isfinite(footprint)))
+              throw InputError(fmt::format("footprint {}: must be a number >= 0", footprint));
+            const Queries q = queries(points, normals);
+            std::vector<float> rgba(4 * q.count);
+            std::vector<uint8_t> found(q.count);
+            {
+              py::gil_scoped_release unlocked;
+              OctreeSampler sampler(t);
+              sampler.filtered_batch(q.p.data(), q.n.empty() ? nullptr : q.n.data(), q.count,
+                                     footprint, rgba.data(), found.data());
+            }
+            return py::make_tuple(
+                owned(std::move(rgba), {py::ssize_t(q.count), 4}),
+                owned(std::move(found), {py::ssize_t(q.count)}).attr("astype")("bool"));
+          },
+          py::arg("points"), py::arg("normals") = py::none(), py::arg("footprint") = 0.0f,
+          R"(Filtered lookups: (rgba (n, 4) float32 straight in [0, 1], found (n,) bool).
+
+Trilinear over the leaves around each point (what the renderer shows); footprint (world units):
+wider than a leaf blends the mip levels it spans.)");
+
+  m.def(
+      "load_texture",
+      [](const std::filesystem::path& path) {
+        py::gil_scoped_release unlocked;
+        return load_lot(path);
+      },
+      py::arg("path"), "Reads a .lot texture; InputError naming the file when it is not one.");
+  m.def(
+      "_paint",
+      [](const Mesh& mesh, const std::string& strokes_json, const std::string& name, int depth,
+         std::array<float, 4> background, const OctreeTexture* start) {
+        if (depth < 1 || depth > octree::kMaxDepth)
+          throw InputError(fmt::format("depth {}: must be 1-{}", depth, octree::kMaxDepth));
+        for (float c : background)
+          if (!(c >= 0 && c <= 1))
+            throw InputError("background: components must be numbers in [0, 1]");
+        const StrokeScript script = parse_strokes(strokes_json, name, depth);
+        std::optional<OctreeTexture> first;
+        if (start) first = *start;  // a copy: the caller's texture stays as it was
+        jobs::PaintOutcome out;
+        {
+          py::gil_scoped_release unlocked;
+          out = jobs::paint(mesh, script, rgba8_from_float(background.data()), std::move(first));
+        }
+        nlohmann::json report = std::move(out.report);
+        report["depth"] = depth;
+        return py::make_tuple(std::move(out.texture), to_python(report));
+      },
+      py::arg("mesh"), py::arg("strokes_json"), py::arg("name"), py::arg("depth"),
+      py::arg("background"), py::arg("texture"));
+  m.def(
+      "_bake_vertex_colors",
+      [](const OctreeTexture& t, const Mesh& mesh, bool nearest) {
+        BakeOptions o;
+        o.filtered = !nearest;
+        std::vector<float> colors;
+        {
+          py::gil_scoped_release unlocked;
+          colors = bake_vertex_colors(t, mesh, o);
+        }
+        const auto n = py::ssize_t(colors.size() / 4);
+        return owned(std::move(colors), {n, 4});
+      },
+      py::arg("texture"), py::arg("mesh"), py::arg("nearest"));
+  m.def(
+      "_bake_uv_image",
+      [](const OctreeTexture& t, const Mesh& mesh, int width, int height, int gutter,
+         bool nearest) {
+        if (gutter < 0 || gutter > 1024) throw InputError("gutter: must be 0-1024 pixels");
+        BakeOptions o;
+        o.filtered = !nearest;
+        Image img;
+        {
+          py::gil_scoped_release unlocked;
+          img = bake_uv_texture(t, mesh, width, height, gutter, o);
+        }
+        return owned(std::move(img.rgba), {py::ssize_t(img.height), py::ssize_t(img.width), 4});
+      },
+      py::arg("texture"), py::arg("mesh"), py::arg("width"), py::arg("height"), py::arg("gutter"),
+      py::arg("nearest"));
+}
+
+}  // namespace limn::py_bind
