@@ -21,8 +21,8 @@ from typing import Any, Optional
 
 import numpy as np
 
-from ._limn import (InputError, Mesh, RepairableError, Texture, __version__, load_texture,
-                    read_mesh, read_png, shape, shape_names)
+from ._limn import (InputError, Mesh, RepairableError, StencilTable, Texture, __version__,
+                    load_texture, read_mesh, read_png, shape, shape_names)
 from . import _limn
 
 __all__ = [
@@ -33,6 +33,8 @@ __all__ = [
     "RepairResult",
     "RepairableError",
     "SimplifyResult",
+    "StencilResult",
+    "StencilTable",
     "SubdivideResult",
     "Texture",
     "__version__",
@@ -47,6 +49,7 @@ __all__ = [
     "shape",
     "shape_names",
     "simplify",
+    "stencils",
     "subdivide",
     "write_mesh",
     "write_png",
@@ -150,6 +153,23 @@ def subdivide(mesh: Mesh, *, uniform: int, limit: bool = False) -> SubdivideResu
     """
     out, stats = _limn._subdivide_uniform(mesh, int(uniform), bool(limit))
     return SubdivideResult(out, stats)
+
+
+@dataclasses.dataclass
+class StencilResult:
+    """table: the cage's points to ``mesh``'s points in one pass (:class:`StencilTable`). mesh:
+    the refined mesh (topology, and positions of the cage as it is)."""
+    table: StencilTable
+    mesh: Mesh
+
+
+def stencils(mesh: Mesh, *, uniform: int, limit: bool = False) -> StencilResult:
+    """Stencils for an animated cage: ``subdivide(mesh, uniform=L, limit=limit)`` once, and a
+    table that turns any new cage positions (or colours, or any per-vertex data) into the refined
+    mesh's, ``result.table.apply(new_positions)``, without refining again.
+    """
+    table, refined = _limn._stencils(mesh, int(uniform), bool(limit))
+    return StencilResult(table, refined)
 
 
 @dataclasses.dataclass

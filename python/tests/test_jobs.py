@@ -131,3 +131,27 @@ def test_the_worked_example_in_the_docs_runs(tmp_path, monkeypatch):
     assert limn.info(limn.read_mesh(tmp_path / "smooth.obj"))["manifold"]
     for name in ("scan", "cage", "smooth"):
         assert limn.read_png(tmp_path / f"{name}.png").shape == (300, 480, 4)
+
+
+@pytest.mark.parametrize("limit", [False, True])
+def test_stencils_animate_a_cage_without_refining_again(limit):
+    cage = limn.shape("cage")
+    result = limn.stencils(cage, uniform=2, limit=limit)
+    table, mesh = result.table, result.mesh
+    assert table.size == mesh.vertex_count and table.source_count <= cage.vertex_count
+    assert np.allclose(table.apply(cage.positions), mesh.positions, atol=1e-5)
+    # A new pose of the cage: the table gives what refining the posed cage gives.
+    posed = cage.copy()
+    p = posed.positions
+    angle = p[:, 2:3] * 0.7
+    x, y = p[:, 0:1].copy(), p[:, 1:2].copy()
+    p[:, 0:1], p[:, 1:2] = x * np.cos(angle) - y * np.sin(angle), x * np.sin(angle) + y * np.cos(
+        angle)
+    again = limn.subdivide(posed, uniform=2, limit=limit).mesh
+    assert np.allclose(table.apply(posed.positions), again.positions, atol=1e-5)
+    # Any per-point data: colours too.
+    rgba = np.random.default_rng(0).random((cage.vertex_count, 4)).astype(np.float32)
+    assert table.apply(rgba).shape == (table.size, 4)
+    assert not table.weights.flags.owndata and table.weights.base is not None  # a view
+    with pytest.raises(limn.InputError, match="rows, the table reads"):
+        table.apply(cage.positions[:3])
