@@ -119,10 +119,24 @@ def up_to_date(asset: dict[str, Any]) -> bool:
         return False
 
 
+def _remove_stale_temporaries(outputs: list[str]) -> None:
+    """Removes what a killed run of this asset left while writing: limn writes OUT through a
+    temporary ``.OUT.limn-XXXXXX`` beside it and renames it, and a worker killed in between
+    cannot remove it."""
+    for out in outputs:
+        path = pathlib.Path(out)
+        for stale in path.parent.glob(f".{path.name}.limn-*"):
+            try:
+                stale.unlink()
+            except OSError:
+                pass
+
+
 def run_asset(asset: dict[str, Any], force: bool = False) -> dict[str, Any]:
     """Runs one asset's steps; never raises: a failure is the result's ``error``."""
     import limn  # on the worker
 
+    _remove_stale_temporaries(_outputs(asset))
     start = time.perf_counter()
     result: dict[str, Any] = {"name": asset["name"], "input": asset["input"], "outputs": [],
                               "stats": [], "error": None}
