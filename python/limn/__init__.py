@@ -21,14 +21,15 @@ from typing import Any, Optional
 
 import numpy as np
 
-from ._limn import (InputError, Mesh, RepairableError, StencilTable, Texture, __version__,
-                    load_texture, read_mesh, read_png, shape, shape_names)
+from ._limn import (InputError, Mesh, PatchTable, RepairableError, StencilTable, Texture,
+                    __version__, load_texture, patches, read_mesh, read_png, shape, shape_names)
 from . import _limn
 
 __all__ = [
     "InputError",
     "Mesh",
     "PaintResult",
+    "PatchTable",
     "RenderResult",
     "RepairResult",
     "RepairableError",
@@ -42,6 +43,7 @@ __all__ = [
     "info",
     "load_texture",
     "paint",
+    "patches",
     "read_mesh",
     "read_png",
     "render",

@@ -36,6 +36,7 @@ PYBIND11_MODULE(_limn, m) {
   limn::py_bind::bind_mesh(m);
   limn::py_bind::bind_jobs(m);
   limn::py_bind::bind_subdiv(m);
+  limn::py_bind::bind_patches(m);
   limn::py_bind::bind_paint(m);  // before render, whose functions take a Texture
   limn::py_bind::bind_render(m);
 }

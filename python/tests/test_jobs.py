@@ -155,3 +155,44 @@ def test_stencils_animate_a_cage_without_refining_again(limit):
     assert not table.weights.flags.owndata and table.weights.base is not None  # a view
     with pytest.raises(limn.InputError, match="rows, the table reads"):
         table.apply(cage.positions[:3])
+
+
+def test_patches_evaluate_and_tessellate_as_the_cli(tmp_path, cli):
+    cage = limn.shape("torus")
+    table = limn.patches(cage, depth=3)
+    assert table.regular_count > 0 and table.gregory_count > 0
+    # Tessellation: the mesh `limn subdivide --adaptive --depth 3 --tess 4` writes.
+    limn.write_mesh(cage, tmp_path / "torus.obj")
+    cli("subdivide", tmp_path / "torus.obj", "-o", tmp_path / "cli.obj", "--adaptive", "--depth",
+        3, "--tess", 4)
+    limn.write_mesh(table.tessellate(tess=4), tmp_path / "py.obj")
+    assert (tmp_path / "py.obj").read_bytes() == (tmp_path / "cli.obj").read_bytes()
+    # The limit at each cage quad's first corner, (u, v) = (0, 0) of its ptex face, is the limit
+    # of that vertex, which the limit stencils (another path: limit masks) give too.
+    quads = cage.faces
+    ptex = table.ptex_of_face[:-1]
+    zeros = np.zeros(len(ptex), np.float32)
+    pos, du, dv = table.evaluate(ptex, zeros, zeros)
+    limit = limn.stencils(cage, uniform=1, limit=True)
+    level1 = limit.table.apply(cage.positions)
+    edges = limn.info(cage)["edges"]
+    first_child = cage.face_count + edges  # level 1: face points, edge points, vertex points
+    assert np.allclose(pos, level1[first_child + quads[:, 0]], atol=1e-5)
+    # Derivatives: central differences along u and v inside a face.
+    h = 1e-3
+    at = np.full(len(ptex), 0.5, np.float32)
+    p0, du0, dv0 = table.evaluate(ptex, at, at)
+    pu, _, _ = table.evaluate(ptex, at + h, at)
+    pv, _, _ = table.evaluate(ptex, at, at + h)
+    assert np.allclose((pu - p0) / h, du0, atol=2e-2 * np.abs(du0).max())
+    assert np.allclose((pv - p0) / h, dv0, atol=2e-2 * np.abs(dv0).max())
+    # An animated cage: update the points, evaluate again.
+    moved = cage.positions * 2
+    table.update(moved)
+    assert np.allclose(table.evaluate(ptex, zeros, zeros)[0], 2 * pos, atol=1e-4)
+    with pytest.raises(limn.InputError, match="outside"):
+        table.evaluate([0], [1.5], [0.0])
+    with pytest.raises(limn.InputError, match="out of range"):
+        table.evaluate([table.ptex_count], [0.5], [0.5])
+    with pytest.raises(limn.InputError, match="depth 13"):
+        limn.patches(cage, depth=13)

@@ -1,0 +1,126 @@
+// Feature-adaptive patch tables for Python: limit evaluation at (ptex face, u, v) arrays with
+// derivatives, and watertight tessellation, as `limn subdivide --adaptive` makes them.
+#include <fmt/format.h>
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+
+#include "arrays.hpp"
+#include "bindings.hpp"
+#include "limn/subdiv/patches.hpp"
+#include "limn/subdiv/refine.hpp"
+#include "limn/subdiv/tessellate.hpp"
+
+namespace limn::py_bind {
+
+namespace {
+
+// A table with the cage it was built from and its points, ready to evaluate.
+struct Patches {
+  Mesh cage;
+  PatchTable table;
+  std::vector<float> points;
+  std::unique_ptr<PatchMap> map;
+};
+
+}  // namespace
+
+void bind_patches(py::module_& m) {
+  py::class_<Patches>(m, "PatchTable", R"(A feature-adaptive patch table over a cage (limn
+subdivide --adaptive): regular B-spline patches where the surface is regular, end caps around
+extraordinary vertices isolated to their depth. Evaluates the limit surface exactly.)")
+      .def_property_readonly("regular_count",
+                             [](const Patches& p) { return p.table.regular_params.size(); })
+      .def_property_readonly("gregory_count",
+                             [](const Patches& p) { return p.table.gregory_params.size(); })
+      .def_property_readonly(
+          "ptex_count", [](const Patches& p) { return p.table.ptex_count; },
+          "Ptex faces: one per cage quad, one per corner of other faces.")
+      .def_property_readonly("point_count", [](const Patches& p) { return p.points.size() / 3; })
+      .def_property_readonly(
+          "ptex_of_face",
+          [](py::object self) { return view(self.cast<Patches&>().table.ptex_of_face, 0, self); },
+          "(faces + 1,) uint32: the first ptex face of each cage face")
+      .def(
+          "update",
+          [](Patches& p, py::handle positions) {
+            std::vector<float> cage = floats(positions, "positions", 3);
+            if (cage.size() != p.cage.positions.size())
+              throw InputError(fmt::format("positions: {} rows, the cage has {}", cage.size() / 3,
+                                           p.cage.vertex_count()));
+            py::gil_scoped_release unlocked;
+            p.cage.positions = std::move(cage);
+            p.points = p.table.points(p.cage.positions);
+          },
+          py::arg("positions"),
+          "New cage positions (an animated cage): the patch points again, nothing refined.")
+      .def(
+          "evaluate",
+          [](const Patches& p, py::handle ptex, py::handle u, py::handle v) {
+            const std::vector<uint32_t> faces = indices(ptex, "ptex", 0, p.table.ptex_count);
+            const std::vector<float> us = floats(u, "u", 0), vs = floats(v, "v", 0);
+            if (us.size() != faces.size() || vs.size() != faces.size())
+              throw InputError("ptex, u and v: expected arrays of one length");
+            for (size_t i = 0; i < us.size(); ++i)
+              if (!(us[i] >= 0 && us[i] <= 1 && vs[i] >= 0 && vs[i] <= 1))
+                throw InputError(
+                    fmt::format("u, v: ({}, {}) at {} is outside [0, 1]", us[i], vs[i], i));
+            const size_t n = faces.size();
+            std::vector<float> pos(3 * n), du(3 * n), dv(3 * n);
+            {
+              py::gil_scoped_release unlocked;
+              std::vector<PatchCoord> coords(n);
+              for (size_t i = 0; i < n; ++i) coords[i] = p.map->find(faces[i], us[i], vs[i]);
+              evaluate_patches(p.table, p.points, coords, pos.data(), du.data(), dv.data());
+            }
+            const auto rows = py::ssize_t(n);
+            return py::make_tuple(owned(std::move(pos), {rows, 3}), owned(std::move(du), {rows, 3}),
+                                  owned(std::move(dv), {rows, 3}));
+          },
+          py::arg("ptex"), py::arg("u"), py::arg("v"),
+          R"(Limit positions and first derivatives (per ptex unit) at (ptex, u, v) arrays:
+(positions, du, dv), each (n, 3) float32. u, v in [0, 1].)")
+      .def(
+          "tessellate",
+          [](const Patches& p, int tess, bool normals) {
+            if (tess < 1 || tess > 64) throw InputError(fmt::format("tess {}: must be 1-64", tess));
+            TessellateOptions o;
+            o.factor = tess;
+            o.normals = normals;
+            py::gil_scoped_release unlocked;
+            return tessellate_patches(p.cage, p.table, p.points, o);
+          },
+          py::arg("tess") = 4, py::arg("normals") = true,
+          "A watertight mesh of the limit surface: `tess` segments per patch edge (1-64), with "
+          "limit normals (what `limn subdivide --adaptive --tess N` writes).");
+  m.def(
+      "patches",
+      [](const Mesh& cage, int depth, py::handle vertex_depth) {
+        if (depth < 0 || depth > 12) throw InputError(fmt::format("depth {}: must be 0-12", depth));
+        std::vector<uint8_t> vdepth;
+        if (!vertex_depth.is_none()) {
+          for (uint32_t d : indices(vertex_depth, "vertex_depth", 0, 17))
+            vdepth.push_back(uint8_t(d));
+          if (vdepth.size() != cage.vertex_count())
+            throw InputError(fmt::format("vertex_depth: {} entries for {} vertices", vdepth.size(),
+                                         cage.vertex_count()));
+        }
+        auto p = std::make_unique<Patches>();
+        {
+          py::gil_scoped_release unlocked;
+          p->cage = cage;
+          PatchOptions o;
+          o.subdiv = subdiv_options(cage);
+          o.depth = depth;
+          p->table = build_patches(cage, o, vdepth);
+          p->points = p->table.points(cage.positions);
+          p->map = std::make_unique<PatchMap>(p->table);
+        }
+        return p;
+      },
+      py::arg("mesh"), py::kw_only(), py::arg("depth") = 3, py::arg("vertex_depth") = py::none(),
+      R"(The feature-adaptive patch table of a cage: every extraordinary vertex (and sharp
+feature) isolated `depth` times (0-12), or each vertex to its own depth (vertex_depth: one per
+cage vertex, 0-16, capped by depth). InputError for cages limn cannot subdivide.)");
+}
+
+}  // namespace limn::py_bind
