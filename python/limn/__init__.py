@@ -21,14 +21,16 @@ from typing import Any, Optional
 
 import numpy as np
 
-from ._limn import (InputError, Mesh, PatchTable, RepairableError, StencilTable, Texture,
-                    __version__, load_texture, patches, read_mesh, read_png, shape, shape_names)
+from ._limn import (InputError, Mesh, PatchHierarchy, PatchTable, RepairableError, StencilTable,
+                    Texture, __version__, load_texture, patches, read_mesh, read_png, shape,
+                    shape_names)
 from . import _limn
 
 __all__ = [
     "InputError",
     "Mesh",
     "PaintResult",
+    "PatchHierarchy",
     "PatchTable",
     "RenderResult",
     "RepairResult",
@@ -43,11 +45,13 @@ __all__ = [
     "info",
     "load_texture",
     "paint",
+    "patch_hierarchy",
     "patches",
     "read_mesh",
     "read_png",
     "render",
     "repair",
+    "select_depths",
     "shape",
     "shape_names",
     "simplify",
@@ -174,6 +178,50 @@ def stencils(mesh: Mesh, *, uniform: int, limit: bool = False) -> StencilResult:
     return StencilResult(table, refined)
 
 
+def _size(resolution) -> tuple[int, int]:
+    if isinstance(resolution, str):
+        try:
+            width, height = (int(v) for v in resolution.lower().split("x"))
+        except ValueError:
+            raise InputError(f"resolution {resolution}: expected WxH") from None
+        return width, height
+    width, height = resolution
+    return int(width), int(height)
+
+
+def patch_hierarchy(mesh: Mesh, *, max_depth: int = 10) -> PatchHierarchy:
+    """Every patch ``mesh`` can need down to ``max_depth`` (0-12), each vertex's errors measured
+    on it (``limn subdivide --adaptive --tolerance PX --errors measured``). Then per view:
+    ``depths = h.select_depths(camera=..., resolution=..., tolerance=0.5)`` and
+    ``h.select(depths)``, a :class:`PatchTable` to evaluate or tessellate; nothing is refined
+    again."""
+    return _limn._patch_hierarchy(mesh, int(max_depth))
+
+
+def _hierarchy_select_depths(self, *, camera=None, resolution=(1280, 720), tolerance=0.5,
+                             previous=None):
+    """A depth per cage vertex (uint8) that keeps the view's screen error under ``tolerance``
+    pixels, from the measured errors. camera: (ex, ey, ez, tx, ty, tz, fovy_deg) or a report's
+    dict (default: the cage framed). previous: the last view's depths (hysteresis: depths fall
+    only when the need is well below, so small camera moves do not flicker)."""
+    width, height = _size(resolution)
+    return _limn.PatchHierarchy._select_depths(self, width, height, _camera_numbers(camera),
+                                               float(tolerance), previous)
+
+
+PatchHierarchy.select_depths = _hierarchy_select_depths
+
+
+def select_depths(mesh: Mesh, *, camera=None, resolution=(1280, 720), tolerance: float = 0.5,
+                  max_depth: int = 10) -> np.ndarray:
+    """A depth per cage vertex (uint8) for a view from estimated errors (no hierarchy: cheaper,
+    more conservative than :meth:`PatchHierarchy.select_depths`); feed it to
+    ``patches(mesh, depth=max_depth, vertex_depth=...)``."""
+    width, height = _size(resolution)
+    return _limn._estimate_depths(mesh, width, height, _camera_numbers(camera), float(tolerance),
+                                  int(max_depth))
+
+
 @dataclasses.dataclass
 class RenderResult:
     """image: (h, w, 4) uint8 RGBA, rows top to bottom. stats: ``limn render --json``'s report
@@ -202,13 +250,7 @@ def render(mesh: Mesh, *, resolution: tuple[int, int] | str = (1280, 720),
     wireframe: polygon edges. uv_checker: the mesh's UVs as a checker of N squares per unit.
     texture: colour from a painted octree texture (nearest: nearest texel, not filtered).
     """
-    if isinstance(resolution, str):
-        try:
-            width, height = (int(v) for v in resolution.lower().split("x"))
-        except ValueError:
-            raise InputError(f"resolution {resolution}: expected WxH") from None
-    else:
-        width, height = resolution
+    width, height = _size(resolution)
     bg = [float(c) for c in background]
     if len(bg) == 3:
         bg.append(1.0)

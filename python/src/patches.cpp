@@ -4,8 +4,14 @@
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 
+#include <array>
+#include <cmath>
+#include <memory>
+#include <optional>
+
 #include "arrays.hpp"
 #include "bindings.hpp"
+#include "limn/subdiv/depth.hpp"
 #include "limn/subdiv/patches.hpp"
 #include "limn/subdiv/refine.hpp"
 #include "limn/subdiv/tessellate.hpp"
@@ -14,13 +20,50 @@ namespace limn::py_bind {
 
 namespace {
 
-// A table with the cage it was built from and its points, ready to evaluate.
+// Every patch of a cage down to a depth, with its measured errors (what `limn subdivide
+// --adaptive --tolerance PX --errors measured` builds once for all views).
+struct Hierarchy {
+  Mesh cage;
+  PatchHierarchy hierarchy;
+  VertexErrorModel model;
+  std::vector<float> points;
+  int max_depth = 0;
+};
+
+// A table with the cage it was built from and its points, ready to evaluate. A selection from a
+// hierarchy evaluates over the hierarchy's points (`from`).
 struct Patches {
   Mesh cage;
   PatchTable table;
   std::vector<float> points;
   std::unique_ptr<PatchMap> map;
+  std::shared_ptr<Hierarchy> from;
 };
+
+// A view's camera: the framed one for the image size, with eye, target and fovy when given.
+Camera view_camera(const Mesh& cage, int width, int height,
+                   const std::optional<std::array<float, 7>>& c) {
+  if (width < 1 || height < 1 || width > 32768 || height > 32768)
+    throw InputError(fmt::format("resolution {}x{}: each side must be 1-32768", width, height));
+  Camera cam = frame_camera(cage, width, height);
+  if (c) {
+    for (float x : *c)
+      if (!std::isfinite(x)) throw InputError("camera: not finite");
+    if (!((*c)[6] > 0 && (*c)[6] < 180))
+      throw InputError(fmt::format("camera: fovy_deg {} must be in (0, 180)", (*c)[6]));
+    for (int k = 0; k < 3; ++k) cam.eye[k] = (*c)[size_t(k)], cam.target[k] = (*c)[size_t(k) + 3];
+    cam.fovy_deg = (*c)[6];
+  }
+  return cam;
+}
+
+std::vector<uint8_t> depths_arg(py::handle depths, size_t vertices, const char* what) {
+  std::vector<uint8_t> out;
+  for (uint32_t d : indices(depths, what, 0, 17)) out.push_back(uint8_t(d));
+  if (out.size() != vertices)
+    throw InputError(fmt::format("{}: {} entries for {} vertices", what, out.size(), vertices));
+  return out;
+}
 
 }  // namespace
 
@@ -49,7 +92,13 @@ extraordinary vertices isolated to their depth. Evaluates the limit surface exac
                                            p.cage.vertex_count()));
             py::gil_scoped_release unlocked;
             p.cage.positions = std::move(cage);
-            p.points = p.table.points(p.cage.positions);
+            if (p.from) {  // a selection: its hierarchy's points, shared with other selections
+              p.from->cage.positions = p.cage.positions;
+              p.from->points = p.from->hierarchy.table.points(p.cage.positions);
+              p.points = p.from->points;
+            } else {
+              p.points = p.table.points(p.cage.positions);
+            }
           },
           py::arg("positions"),
           "New cage positions (an animated cage): the patch points again, nothing refined.")
@@ -121,6 +170,94 @@ extraordinary vertices isolated to their depth. Evaluates the limit surface exac
       R"(The feature-adaptive patch table of a cage: every extraordinary vertex (and sharp
 feature) isolated `depth` times (0-12), or each vertex to its own depth (vertex_depth: one per
 cage vertex, 0-16, capped by depth). InputError for cages limn cannot subdivide.)");
+
+  py::class_<Hierarchy, std::shared_ptr<Hierarchy>>(m, "PatchHierarchy", R"(Every patch a cage can
+need down to max_depth, with each vertex's errors measured on it: views then choose depths and
+select their patches without refining again.)")
+      .def_property_readonly("max_depth", [](const Hierarchy& h) { return h.max_depth; })
+      .def(
+          "_select_depths",  // limn/__init__.py wraps it as select_depths
+          [](const Hierarchy& h, int width, int height, std::optional<std::array<float, 7>> camera,
+             float tolerance, py::handle previous) {
+            if (!(tolerance > 0 && std::isfinite(tolerance)))
+              throw InputError(
+                  fmt::format("tolerance {}: must be a positive number of pixels", tolerance));
+            std::vector<uint8_t> prev;
+            if (!previous.is_none()) prev = depths_arg(previous, h.cage.vertex_count(), "previous");
+            const Camera cam = view_camera(h.cage, width, height, camera);
+            DepthOptions d;
+            d.tolerance_px = tolerance;
+            d.max_depth = h.max_depth;
+            std::vector<uint8_t> depths;
+            {
+              py::gil_scoped_release unlocked;
+              depths = select_depths(h.cage, h.model, cam, d, prev);
+            }
+            const auto n = py::ssize_t(depths.size());
+            return owned(std::move(depths), {n});
+          },
+          py::arg("width"), py::arg("height"), py::arg("camera"), py::arg("tolerance"),
+          py::arg("previous"))
+      .def(
+          "select",
+          [](const std::shared_ptr<Hierarchy>& h, py::handle vertex_depth) {
+            const std::vector<uint8_t> vdepth =
+                depths_arg(vertex_depth, h->cage.vertex_count(), "vertex_depth");
+            auto p = std::make_unique<Patches>();
+            {
+              py::gil_scoped_release unlocked;
+              p->cage = h->cage;
+              p->table = select_patches(h->hierarchy, vdepth);
+              p->points = h->points;
+              p->map = std::make_unique<PatchMap>(p->table);
+              p->from = h;
+            }
+            return p;
+          },
+          py::arg("vertex_depth"),
+          "The patches of a depth per cage vertex (select_depths' result), as a PatchTable.");
+  m.def(
+      "_patch_hierarchy",
+      [](const Mesh& cage, int max_depth) {
+        if (max_depth < 0 || max_depth > 12)
+          throw InputError(fmt::format("max_depth {}: must be 0-12", max_depth));
+        auto h = std::make_shared<Hierarchy>();
+        py::gil_scoped_release unlocked;
+        h->cage = cage;
+        h->max_depth = max_depth;
+        PatchOptions o;
+        o.subdiv = subdiv_options(cage);
+        o.depth = max_depth;
+        h->model = vertex_error_model(cage, o.subdiv);
+        h->hierarchy = build_patch_hierarchy(cage, o);
+        measure_vertex_errors(cage, h->hierarchy, h->model);
+        h->points = h->hierarchy.table.points(cage.positions);
+        return h;
+      },
+      py::arg("mesh"), py::arg("max_depth"));
+  m.def(
+      "_estimate_depths",
+      [](const Mesh& cage, int width, int height, std::optional<std::array<float, 7>> camera,
+         float tolerance, int max_depth) {
+        if (!(tolerance > 0 && std::isfinite(tolerance)))
+          throw InputError(
+              fmt::format("tolerance {}: must be a positive number of pixels", tolerance));
+        if (max_depth < 0 || max_depth > 16)
+          throw InputError(fmt::format("max_depth {}: must be 0-16", max_depth));
+        const Camera cam = view_camera(cage, width, height, camera);
+        DepthOptions d;
+        d.tolerance_px = tolerance;
+        d.max_depth = max_depth;
+        std::vector<uint8_t> depths;
+        {
+          py::gil_scoped_release unlocked;
+          depths = select_depths(cage, vertex_error_model(cage, subdiv_options(cage)), cam, d);
+        }
+        const auto n = py::ssize_t(depths.size());
+        return owned(std::move(depths), {n});
+      },
+      py::arg("mesh"), py::arg("width"), py::arg("height"), py::arg("camera"), py::arg("tolerance"),
+      py::arg("max_depth"));
 }
 
 }  // namespace limn::py_bind

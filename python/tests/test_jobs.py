@@ -196,3 +196,32 @@ def test_patches_evaluate_and_tessellate_as_the_cli(tmp_path, cli):
         table.evaluate([table.ptex_count], [0.5], [0.5])
     with pytest.raises(limn.InputError, match="depth 13"):
         limn.patches(cage, depth=13)
+
+
+def test_view_dependent_depths_as_the_cli(tmp_path, cli):
+    cage = limn.shape("torus")
+    limn.write_mesh(cage, tmp_path / "torus.obj")
+    camera = (0.2, -3.5, 1.2, 0.0, 0.0, 0.0, 40.0)
+    view = ["--camera", ",".join(map(str, camera)), "--resolution", "640x400", "--tess", 4]
+    # Measured errors on a hierarchy.
+    cli("subdivide", tmp_path / "torus.obj", "-o", tmp_path / "measured.obj", "--adaptive",
+        "--tolerance", 0.5, "--max-depth", 6, "--errors", "measured", *view)
+    h = limn.patch_hierarchy(cage, max_depth=6)
+    depths = h.select_depths(camera=camera, resolution=(640, 400), tolerance=0.5)
+    assert depths.dtype == np.uint8 and depths.shape == (cage.vertex_count,)
+    assert 0 < depths.max() <= 6
+    limn.write_mesh(h.select(depths).tessellate(tess=4), tmp_path / "py.obj")
+    assert (tmp_path / "py.obj").read_bytes() == (tmp_path / "measured.obj").read_bytes()
+    # Estimated errors: depths for build_patches.
+    cli("subdivide", tmp_path / "torus.obj", "-o", tmp_path / "estimated.obj", "--adaptive",
+        "--tolerance", 0.5, "--max-depth", 6, "--errors", "estimated", *view)
+    est = limn.select_depths(cage, camera=camera, resolution="640x400", tolerance=0.5,
+                             max_depth=6)
+    limn.write_mesh(limn.patches(cage, depth=6, vertex_depth=est).tessellate(tess=4),
+                    tmp_path / "py_est.obj")
+    assert (tmp_path / "py_est.obj").read_bytes() == (tmp_path / "estimated.obj").read_bytes()
+    # A closer camera needs at least the same depths; the far side of the torus no more.
+    near = h.select_depths(camera=(0.1, -2.0, 0.6, 0, 0, 0, 40), resolution=(640, 400))
+    assert near.max() >= depths.max()
+    with pytest.raises(limn.InputError, match="tolerance"):
+        h.select_depths(tolerance=0)
