@@ -21,15 +21,16 @@ from typing import Any, Optional
 
 import numpy as np
 
-from ._limn import (InputError, Mesh, PatchHierarchy, PatchTable, RepairableError, StencilTable,
-                    Texture, __version__, load_texture, patches, read_mesh, read_png, shape,
-                    shape_names)
+from ._limn import (InputError, Mesh, Painter, PatchHierarchy, PatchTable, RepairableError,
+                    StencilTable, Texture, __version__, load_texture, patches, read_mesh,
+                    read_png, shape, shape_names)
 from . import _limn
 
 __all__ = [
     "InputError",
     "Mesh",
     "PaintResult",
+    "Painter",
     "PatchHierarchy",
     "PatchTable",
     "RenderResult",
@@ -287,6 +288,28 @@ def _jsonable(value):
     return value
 
 
+def _script_text(strokes) -> tuple[str, str]:
+    if isinstance(strokes, os.PathLike) or (isinstance(strokes, str)
+                                            and not strokes.lstrip().startswith(("{", "["))):
+        name = os.fspath(strokes)
+        with open(name, encoding="utf-8") as f:
+            return name, f.read()
+    if isinstance(strokes, str):
+        return "strokes", strokes
+    return "strokes", json.dumps(_jsonable(strokes))
+
+
+def _painter_run(self, strokes) -> dict[str, Any]:
+    """Paints a stroke script (a dict, its JSON text or a file, as :func:`paint` takes) into
+    the session's texture; each stroke and fill can then be undone. Returns the counts
+    (strokes, dabs, samples changed, undos and redos the script did)."""
+    name, text = _script_text(strokes)
+    return self._run(text, name)
+
+
+Painter.run = _painter_run
+
+
 def paint(mesh: Mesh, strokes, *, depth: int = 10, texture: Optional[Texture] = None,
           background=(0.0, 0.0, 0.0, 0.0)) -> PaintResult:
     """``limn paint``: runs a stroke script on ``mesh`` into a new octree texture (or a copy of
@@ -297,15 +320,7 @@ def paint(mesh: Mesh, strokes, *, depth: int = 10, texture: Optional[Texture] = 
     level of entries that give none (1-16; 10 is 1024^3 over the mesh's bounding cube).
     background: RGB(A) in [0, 1] of unpainted surface in a new texture.
     """
-    if isinstance(strokes, os.PathLike) or (isinstance(strokes, str)
-                                            and not strokes.lstrip().startswith(("{", "["))):
-        name = os.fspath(strokes)
-        with open(name, encoding="utf-8") as f:
-            text = f.read()
-    elif isinstance(strokes, str):
-        name, text = "strokes", strokes
-    else:
-        name, text = "strokes", json.dumps(_jsonable(strokes))
+    name, text = _script_text(strokes)
     bg = [float(c) for c in background]
     if len(bg) == 3:
         bg.append(1.0)

@@ -11,6 +11,8 @@
 #include "limn/paint/bake.hpp"
 #include "limn/paint/file.hpp"
 #include "limn/paint/lookup.hpp"
+#include "limn/paint/surface.hpp"
+#include "limn/paint/undo.hpp"
 #include "reports.hpp"
 
 namespace limn::py_bind {
@@ -33,6 +35,16 @@ Queries queries(py::handle points, py::handle normals) {
   }
   return q;
 }
+
+// A painting session: the surface's BVH built once, a texture and its undo history, so strokes
+// can be added call by call and undone (what the viewer does for an artist).
+struct Painter {
+  Mesh mesh;
+  std::unique_ptr<PaintSurface> surface;
+  OctreeTexture texture;
+  PaintHistory history;
+  int depth = 10;
+};
 
 }  // namespace
 
@@ -108,6 +120,71 @@ background).)")
 Trilinear over the leaves around each point (what the renderer shows); footprint (world units):
 wider than a leaf blends the mip levels it spans.)");
 
+  py::class_<Painter>(m, "Painter", R"(A painting session on one mesh: strokes call by call into one
+texture, each undoable (undo/redo), the surface's BVH built once.)")
+      .def(py::init([](const Mesh& mesh, const OctreeTexture* texture,
+                       std::array<float, 4> background, int depth) {
+             if (depth < 1 || depth > octree::kMaxDepth)
+               throw InputError(fmt::format("depth {}: must be 1-{}", depth, octree::kMaxDepth));
+             for (float c : background)
+               if (!(c >= 0 && c <= 1))
+                 throw InputError("background: components must be numbers in [0, 1]");
+             auto p = std::make_unique<Painter>();
+             py::gil_scoped_release unlocked;
+             p->mesh = mesh;
+             p->surface = std::make_unique<PaintSurface>(p->mesh);
+             p->texture =
+                 texture ? *texture
+                         : OctreeTexture::create(*p->surface, rgba8_from_float(background.data()));
+             p->depth = depth;
+             return p;
+           }),
+           py::arg("mesh"), py::kw_only(), py::arg("texture") = py::none(),
+           py::arg("background") = std::array<float, 4>{0, 0, 0, 0}, py::arg("depth") = 10,
+           "Starts a session on `mesh`: a new texture with `background` (RGBA in [0, 1]), or a "
+           "copy of `texture`; `depth` for strokes that give none.")
+      .def(
+          "_run",
+          [](Painter& p, const std::string& strokes_json, const std::string& name) {
+            const StrokeScript script = parse_strokes(strokes_json, name, p.depth);
+            ScriptResult r;
+            {
+              py::gil_scoped_release unlocked;
+              r = run_strokes(p.texture, *p.surface, script, p.history);
+            }
+            size_t dabs = 0, changed = 0;
+            for (const StrokeStats& st : r.strokes) dabs += st.dabs, changed += st.samples_changed;
+            return to_python({{"strokes", r.strokes.size()},
+                              {"dabs", dabs},
+                              {"samples_changed", changed},
+                              {"undos", r.undos},
+                              {"redos", r.redos}});
+          },
+          py::arg("strokes_json"), py::arg("name"))
+      .def(
+          "undo",
+          [](Painter& p) {
+            py::gil_scoped_release unlocked;
+            return p.history.undo(p.texture);
+          },
+          "Undoes the last stroke or fill; False when there is nothing to undo.")
+      .def(
+          "redo",
+          [](Painter& p) {
+            py::gil_scoped_release unlocked;
+            return p.history.redo(p.texture);
+          },
+          "Redoes the last undone stroke; False when there is nothing to redo.")
+      .def_property_readonly("undo_count", [](const Painter& p) { return p.history.undo_count(); })
+      .def_property_readonly("redo_count", [](const Painter& p) { return p.history.redo_count(); })
+      .def_property_readonly(
+          "texture",
+          [](const Painter& p) {
+            OctreeTexture copy = p.texture;
+            copy.compact();
+            return copy;
+          },
+          "The texture as painted so far (a compact copy: the session goes on).");
   m.def(
       "load_texture",
       [](const std::filesystem::path& path) {

@@ -114,3 +114,24 @@ def test_bad_paint_input(painted):
     (tmp / "bad.lot").write_bytes(b"LOT nonsense")
     with pytest.raises(limn.InputError, match="bad.lot"):
         limn.load_texture(tmp / "bad.lot")
+
+
+def test_a_painting_session_undoes_and_redoes(painted):
+    tmp, mesh, script, points, expected, result = painted
+    session = limn.Painter(mesh, depth=8)
+    blank = session.texture
+    session.run({"strokes": script["strokes"][:1]})
+    session.run({"strokes": script["strokes"][1:2]})
+    assert session.undo_count == 2
+    # Stroke by stroke, the texture `paint` makes from the same two strokes.
+    both = limn.paint(mesh, {"strokes": script["strokes"][:2]}, depth=8).texture
+    assert session.texture.stats == both.stats
+    assert session.undo() and session.undo() and not session.undo()
+    assert session.texture.stats == blank.stats
+    colors, _ = session.texture.nearest(points)
+    assert (colors == 0).all()  # nothing left of the red stroke
+    assert session.redo() and session.redo() and not session.redo()
+    assert np.array_equal(session.texture.nearest(points)[0], both.nearest(points)[0])
+    session.texture.save(tmp / "session.lot")
+    both.save(tmp / "both.lot")
+    assert (tmp / "session.lot").read_bytes() == (tmp / "both.lot").read_bytes()
