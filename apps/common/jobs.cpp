@@ -2,7 +2,6 @@
 
 #include <fmt/format.h>
 
-#include <chrono>
 #include <cmath>
 #include <stdexcept>
 
@@ -14,26 +13,9 @@
 #include "limn/simplify/validate.hpp"
 #include "limn/subdiv/refine.hpp"
 #include "reports.hpp"
+#include "stopwatch.hpp"
 
 namespace limn::jobs {
-
-namespace {
-
-// Milliseconds since the last call (or construction).
-class Laps {
- public:
-  double lap() {
-    const auto now = std::chrono::steady_clock::now();
-    const double d = std::chrono::duration<double, std::milli>(now - last_).count();
-    last_ = now;
-    return d;
-  }
-
- private:
-  std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
-};
-
-}  // namespace
 
 std::string option_name(Names names, std::string_view dashed) {
   if (names == Names::cli) return "--" + std::string(dashed);
@@ -78,7 +60,7 @@ SimplifyOutcome simplify(const Mesh& mesh, const SimplifyJob& o, std::string_vie
   vo.teleports = o.teleports;
   vo.meshing.split_threshold = o.split_threshold;
   vo.meshing.polygons = o.polygons;
-  Laps laps;
+  Stopwatch laps;
   SimplifyOutcome out{simplify_vsa(mesh, vo, name), {}};
   laps.lap();
   const SimplifiedCheck check = validate_simplified(out.result.output.mesh, bounding_box(mesh));
@@ -121,7 +103,7 @@ UniformOutcome subdivide_uniform(const Mesh& cage, int level, bool limit, std::s
   Mesh& out = result.mesh;
   nlohmann::json& levels = result.levels;
   nlohmann::json& timings = result.timings;
-  Laps laps;
+  Stopwatch laps;
   if (!limit) {
     // Lean: only the last level is kept, stencils are applied chunk by chunk and dropped.
     SubdivideStats st;
@@ -205,7 +187,7 @@ UniformOutcome subdivide_uniform(const Mesh& cage, int level, bool limit, std::s
 
 PaintOutcome paint(const Mesh& mesh, const StrokeScript& script, Rgba8 background,
                    std::optional<OctreeTexture> start) {
-  Laps laps;
+  Stopwatch laps;
   const PaintSurface surface(mesh);
   const double t_surface = laps.lap();
   PaintOutcome out{start ? std::move(*start) : OctreeTexture::create(surface, background), {}};

@@ -2,17 +2,18 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
-#include <chrono>
 #include <nlohmann/json.hpp>
 #include <string>
 
 #include "../common/reports.hpp"
+#include "../common/stopwatch.hpp"
 #include "limn/io/mesh_io.hpp"
 #include "limn/mesh/repair.hpp"
 #include "limn/mesh/topology.hpp"
 
 namespace limn::cli {
 
+using jobs::Stopwatch;
 using reports::repair_json;
 using reports::stats_json;
 using reports::texture_json;
@@ -27,25 +28,6 @@ void add_paint(CLI::App& app);
 void add_bake(CLI::App& app);
 void add_render(CLI::App& app);
 void add_repair(CLI::App& app);
-
-/// Milliseconds since construction.
-class Stopwatch {
- public:
-  double ms() const {
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0_)
-        .count();
-  }
-  /// Milliseconds since the last lap (or construction), and restarts the lap.
-  double lap() {
-    const auto now = std::chrono::steady_clock::now();
-    const double d = std::chrono::duration<double, std::milli>(now - lap_).count();
-    lap_ = now;
-    return d;
-  }
-
- private:
-  std::chrono::steady_clock::time_point t0_ = std::chrono::steady_clock::now(), lap_ = t0_;
-};
 
 /// Reads a command's input mesh: `format` from the option named `format_option` (empty: by
 /// extension, then content), `weld` from --weld (glTF: seams merged back into one cage vertex
