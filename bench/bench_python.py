@@ -2,10 +2,10 @@
 
     PYTHONPATH=build/python /usr/bin/python3 bench/bench_python.py [--models ../shared/models]
 
-Overhead: the wall time of a `limn.simplify` / `limn.subdivide` / `limn.info` call from Python
-against the C++ job's own time inside that call (the phases its report times, measured in C++),
-best of N each; the difference is argument conversion, the GIL, results handed to numpy and the
-report turned into a dict. Goal (issue 29): < 5% on a 100k-face job. Batch: the same manifest
+Overhead: the wall time of a `limn.simplify` call from Python against the C++ job's own time
+inside that same call (the phases its report times, measured in C++, which run one after the
+other); the difference is argument conversion, the GIL, results handed to numpy and the report
+turned into a dict. Goal (issue 29): < 5% on a 100k-face job. Batch: the same manifest
 (repair -> simplify -> subdivide per asset) on a LocalCluster of 1 and of 2 worker processes.
 """
 
@@ -14,6 +14,7 @@ import json
 import os
 import pathlib
 import shutil
+import statistics
 import tempfile
 import time
 
@@ -21,45 +22,26 @@ import limn
 from limn import batch
 
 
-def best(fn, repeat):
-    times, out = [], None
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        out = fn()
-        times.append((time.perf_counter() - t0) * 1000)
-    return min(times), out
-
-
-def inner_ms(stats, keys):
-    return sum(stats["timings_ms"][k] or 0.0 for k in keys)
-
-
 def overhead(models, repeat):
-    print("Python call vs the C++ job inside it (best of %d)" % repeat)
-    print(f"{'job':<22} {'mesh':<18} {'faces':>8} {'python ms':>10} {'C++ ms':>9} {'overhead':>9}")
-    rows = []
-    meshes = [("cube", limn.shape("cube")), ("spot", limn.read_mesh(models / "tri/spot.obj")),
-              ("armadillo-100k", limn.read_mesh(models / "tri/armadillo-100k.obj"))]
-    simplify_keys = ("prepare", "seeding", "optimisation", "meshing", "validate")
-    for name, mesh in meshes:
-        if mesh.face_count >= 12:
-            wall, r = best(lambda: limn.simplify(mesh, proxies=min(100, mesh.face_count // 4)),
-                           repeat)
-            # The C++ side of the same call, timed the same way: its phases, best of the runs.
-            inner = min(inner_ms(limn.simplify(mesh, proxies=min(100, mesh.face_count // 4))
-                                 .stats, simplify_keys) for _ in range(repeat))
-            rows.append(("simplify", name, mesh.face_count, wall, inner))
-    for name, mesh in [("torus", limn.shape("torus")), ("torus-dense-small",
-                                                         limn.shape("torus-dense-small"))]:
-        level = 3
-        wall, r = best(lambda: limn.subdivide(mesh, uniform=level), repeat)
-        keys = ("topology", "stencils_and_apply", "output")
-        inner = min(inner_ms(limn.subdivide(mesh, uniform=level).stats, keys)
-                    for _ in range(repeat))
-        rows.append((f"subdivide --uniform {level}", name, r.mesh.face_count, wall, inner))
-    for job, name, faces, wall, inner in rows:
-        print(f"{job:<22} {name:<18} {faces:>8} {wall:>10.2f} {inner:>9.2f} "
-              f"{100 * (wall - inner) / inner:>8.1f}%")
+    """Per call: the wall time from Python, and the C++ job's time inside that same call (its
+    phases, which run one after the other); medians over `repeat` calls."""
+    print(f"Python call vs the C++ job inside it (medians of {repeat} calls)")
+    print(f"{'job':<10} {'mesh':<16} {'faces':>7} {'python ms':>10} {'C++ ms':>9} "
+          f"{'overhead ms':>12} {'overhead':>9}")
+    keys = ("prepare", "seeding", "optimisation", "meshing", "validate")
+    for name, path in [("spot", "tri/spot.obj"), ("fandisk", "tri/fandisk.obj"),
+                       ("armadillo-100k", "tri/armadillo-100k.obj")]:
+        mesh = limn.read_mesh(models / path)
+        walls, inners = [], []
+        for _ in range(repeat):
+            t0 = time.perf_counter()
+            r = limn.simplify(mesh, proxies=100)
+            walls.append((time.perf_counter() - t0) * 1000)
+            inners.append(sum(r.stats["timings_ms"][k] or 0.0 for k in keys))
+        extra = statistics.median(w - i for w, i in zip(walls, inners))
+        inner = statistics.median(inners)
+        print(f"{'simplify':<10} {name:<16} {mesh.face_count:>7} {statistics.median(walls):>10.2f} "
+              f"{inner:>9.2f} {extra:>12.3f} {100 * extra / inner:>8.2f}%")
 
 
 def throughput(models, assets, repeat):
@@ -105,7 +87,7 @@ def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--models", default=str(pathlib.Path(__file__).resolve().parents[2] /
                                                 "shared" / "models"))
-    parser.add_argument("--repeat", type=int, default=5)
+    parser.add_argument("--repeat", type=int, default=15)
     parser.add_argument("--assets", type=int, default=16)
     args = parser.parse_args()
     models = pathlib.Path(args.models)
