@@ -142,9 +142,10 @@ normals (q, 3) with normal_indices, colors (n, 4) RGBA in [0, 1], crease_edges (
 crease_sharpness (k,), corner_vertices with corner_sharpness, hole_faces.
 Raises InputError for out-of-range indices, faces repeating a vertex, NaNs or wrong shapes;
 TypeError for arrays of non-numbers.)")
-      .def_property_readonly("vertex_count", &Mesh::vertex_count)
-      .def_property_readonly("face_count", &Mesh::face_count)
-      .def_property_readonly("corner_count", &Mesh::corner_count)
+      .def_property_readonly("vertex_count", &Mesh::vertex_count, "Vertices (positions rows).")
+      .def_property_readonly("face_count", &Mesh::face_count, "Faces.")
+      .def_property_readonly("corner_count", &Mesh::corner_count,
+                             "Corners: one per face vertex (face_vertices entries).")
       .def_property_readonly(
           "faces",
           [](py::object self) -> py::object {

@@ -24,6 +24,13 @@ PYBIND11_MODULE(_limn, m) {
       (new py::exception<limn::InputError>(m, "InputError", PyExc_ValueError))->ptr();
   static PyObject* repairable =
       (new py::exception<limn::RepairableError>(m, "RepairableError", input_error))->ptr();
+  py::setattr(input_error, "__doc__",
+              py::str("Bad input (a malformed file, an out-of-range index, a NaN, a bad "
+                      "option): limn's one-line message naming the file or array and the "
+                      "problem."));
+  py::setattr(repairable, "__doc__",
+              py::str("Bad input that limn.repair fixes: a face repeating a vertex, a "
+                      "non-manifold edge, faces that disagree on orientation, duplicate faces."));
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);

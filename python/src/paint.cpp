@@ -65,12 +65,13 @@ on a surface without UVs, deep only where detail was painted. Made by paint() or
           "stats", [](const OctreeTexture& t) { return to_python(reports::texture_json(t)); },
           "`limn paint --stats --json`: nodes, bricks, leaves, samples, bytes, bytes per painted "
           "texel, the cube.")
-      .def_property_readonly("background",
-                             [](const OctreeTexture& t) {
-                               const Rgba8 c = t.background();
-                               return py::make_tuple(channel(c, 0), channel(c, 1), channel(c, 2),
-                                                     channel(c, 3));
-                             })
+      .def_property_readonly(
+          "background",
+          [](const OctreeTexture& t) {
+            const Rgba8 c = t.background();
+            return py::make_tuple(channel(c, 0), channel(c, 1), channel(c, 2), channel(c, 3));
+          },
+          "RGBA8 of unpainted surface, as a tuple of 0-255 ints.")
       .def(
           "nearest",
           [](const OctreeTexture& t, py::handle points, py::handle normals) {
@@ -175,8 +176,12 @@ texture, each undoable (undo/redo), the surface's BVH built once.)")
             return p.history.redo(p.texture);
           },
           "Redoes the last undone stroke; False when there is nothing to redo.")
-      .def_property_readonly("undo_count", [](const Painter& p) { return p.history.undo_count(); })
-      .def_property_readonly("redo_count", [](const Painter& p) { return p.history.redo_count(); })
+      .def_property_readonly(
+          "undo_count", [](const Painter& p) { return p.history.undo_count(); },
+          "Strokes and fills undo() can take back.")
+      .def_property_readonly(
+          "redo_count", [](const Painter& p) { return p.history.redo_count(); },
+          "Undone strokes redo() can bring back.")
       .def_property_readonly(
           "texture",
           [](const Painter& p) {

@@ -71,14 +71,18 @@ void bind_patches(py::module_& m) {
   py::class_<Patches>(m, "PatchTable", R"(A feature-adaptive patch table over a cage (limn
 subdivide --adaptive): regular B-spline patches where the surface is regular, end caps around
 extraordinary vertices isolated to their depth. Evaluates the limit surface exactly.)")
-      .def_property_readonly("regular_count",
-                             [](const Patches& p) { return p.table.regular_params.size(); })
-      .def_property_readonly("gregory_count",
-                             [](const Patches& p) { return p.table.gregory_params.size(); })
+      .def_property_readonly(
+          "regular_count", [](const Patches& p) { return p.table.regular_params.size(); },
+          "Regular (B-spline) patches.")
+      .def_property_readonly(
+          "gregory_count", [](const Patches& p) { return p.table.gregory_params.size(); },
+          "End caps (Gregory patches) around extraordinary vertices at their depth.")
       .def_property_readonly(
           "ptex_count", [](const Patches& p) { return p.table.ptex_count; },
           "Ptex faces: one per cage quad, one per corner of other faces.")
-      .def_property_readonly("point_count", [](const Patches& p) { return p.points.size() / 3; })
+      .def_property_readonly(
+          "point_count", [](const Patches& p) { return p.points.size() / 3; },
+          "Control points the patches read (cage, refined and end-cap points).")
       .def_property_readonly(
           "ptex_of_face",
           [](py::object self) { return view(self.cast<Patches&>().table.ptex_of_face, 0, self); },
@@ -174,7 +178,9 @@ cage vertex, 0-16, capped by depth). InputError for cages limn cannot subdivide.
   py::class_<Hierarchy, std::shared_ptr<Hierarchy>>(m, "PatchHierarchy", R"(Every patch a cage can
 need down to max_depth, with each vertex's errors measured on it: views then choose depths and
 select their patches without refining again.)")
-      .def_property_readonly("max_depth", [](const Hierarchy& h) { return h.max_depth; })
+      .def_property_readonly(
+          "max_depth", [](const Hierarchy& h) { return h.max_depth; },
+          "The depth the hierarchy goes down to (the cap of every selection).")
       .def(
           "_select_depths",  // limn/__init__.py wraps it as select_depths
           [](const Hierarchy& h, int width, int height, std::optional<std::array<float, 7>> camera,

@@ -129,8 +129,13 @@ def test_the_worked_example_in_the_docs_runs(tmp_path, monkeypatch):
     cage = limn.read_mesh(tmp_path / "cage.obj")
     assert 0 < cage.face_count <= 60 * 4
     assert limn.info(limn.read_mesh(tmp_path / "smooth.obj"))["manifold"]
-    for name in ("scan", "cage", "smooth"):
+    for name in ("scan", "cage", "smooth", "painted"):
         assert limn.read_png(tmp_path / f"{name}.png").shape == (300, 480, 4)
+    # The paint shows: red where the plain surface is grey.
+    plain = limn.read_png(tmp_path / "smooth.png").astype(int)
+    red = limn.read_png(tmp_path / "painted.png").astype(int)
+    assert ((red[..., 0] - red[..., 1] > 60) & (plain[..., 0] - plain[..., 1] < 20)).any()
+    assert limn.load_texture(tmp_path / "smooth.lot").stats["painted_samples"] > 0
 
 
 @pytest.mark.parametrize("limit", [False, True])

@@ -147,3 +147,17 @@ def test_the_stub_names_what_the_module_has():
     members = {n.name for n in mesh_stub.body if isinstance(n, ast.FunctionDef)}
     members |= {n.target.id for n in mesh_stub.body if isinstance(n, ast.AnnAssign)}
     assert members == {n for n in dir(limn.Mesh) if not n.startswith("_")} | {"__init__"}
+
+
+def test_every_public_name_has_a_docstring():
+    missing = []
+    for name in limn.__all__:
+        obj = getattr(limn, name)
+        if not (obj.__doc__ or "").strip():
+            missing.append(name)
+        if isinstance(obj, type):
+            for member, value in vars(obj).items():
+                doc = (getattr(value, "__doc__", None) or "").strip()
+                if not member.startswith("_") and (not doc or doc.startswith("(self")):
+                    missing.append(f"{name}.{member}")
+    assert not missing
