@@ -14,6 +14,42 @@ nlohmann::json camera_json(const Camera& c) {
           {"fovy_deg", c.fovy_deg}};
 }
 
+namespace {
+
+// The camera a render uses: the cage framed for the image size, with the options' eye, target
+// and fovy when given.
+Camera view_of(const Mesh& mesh, const MeshRender& o) {
+  Camera cam = frame_camera(mesh, o.width, o.height);
+  if (o.camera) {
+    for (int k = 0; k < 3; ++k) cam.eye[k] = o.camera->eye[k];
+    for (int k = 0; k < 3; ++k) cam.target[k] = o.camera->target[k];
+    cam.fovy_deg = o.camera->fovy_deg;
+  }
+  return cam;
+}
+
+DrawOptions draw_options(const MeshRender& o, const GpuOctreeTexture* texture) {
+  DrawOptions d;
+  d.outline = o.wireframe;
+  d.texture = texture;
+  d.texture_nearest = o.nearest;
+  d.uv_checker = o.uv_checker;
+  d.depth_colors = o.depth_colors;
+  d.pixels_per_segment = o.pixels_per_segment;
+  d.factor = o.factor;
+  return d;
+}
+
+nlohmann::json draw_report(const GlContext& gl, const MeshRender& o, const Camera& cam,
+                           const DrawStats& st) {
+  return {{"renderer", gl.renderer()},  {"resolution", {o.width, o.height}},
+          {"camera", camera_json(cam)}, {"drawn", st.patches},
+          {"triangles", st.triangles},  {"gpu_ms", st.gpu_ms},
+          {"cpu_draw_ms", st.cpu_ms}};
+}
+
+}  // namespace
+
 RenderedImage render_mesh(const Mesh& mesh, const MeshRender& o, std::string_view name,
                           Names names) {
   if (o.uv_checker > 0 && mesh.uv_indices.empty())
@@ -23,26 +59,38 @@ RenderedImage render_mesh(const Mesh& mesh, const MeshRender& o, std::string_vie
   std::optional<GpuOctreeTexture> gpu_texture;
   if (o.texture) gpu_texture.emplace(*o.texture);
   RenderTarget target(o.width, o.height, o.samples);
-  DrawOptions d;
-  d.outline = o.wireframe;
-  d.texture = gpu_texture ? &*gpu_texture : nullptr;
-  d.texture_nearest = o.nearest;
-  d.uv_checker = o.uv_checker;
   RenderedImage out;
-  out.camera = frame_camera(mesh, o.width, o.height);
-  if (o.camera) {
-    for (int k = 0; k < 3; ++k) out.camera.eye[k] = o.camera->eye[k];
-    for (int k = 0; k < 3; ++k) out.camera.target[k] = o.camera->target[k];
-    out.camera.fovy_deg = o.camera->fovy_deg;
-  }
+  out.camera = view_of(mesh, o);
   MeshDrawer drawer(mesh, {}, o.flat);
   target.begin(o.background);
-  const DrawStats st = drawer.draw(out.camera, d);
+  const DrawStats st =
+      drawer.draw(out.camera, draw_options(o, gpu_texture ? &*gpu_texture : nullptr));
   out.rgba = target.read_rgba();
-  out.report = {{"renderer", gl.renderer()},         {"resolution", {o.width, o.height}},
-                {"camera", camera_json(out.camera)}, {"drawn", st.patches},
-                {"triangles", st.triangles},         {"gpu_ms", st.gpu_ms},
-                {"cpu_draw_ms", st.cpu_ms}};
+  out.report = draw_report(gl, o, out.camera, st);
+  out.report["patches"] = nullptr;
+  return out;
+}
+
+RenderedImage render_patches(const Mesh& cage, const PatchTable& table,
+                             std::span<const float> points, const MeshRender& o,
+                             std::string_view name, Names names) {
+  if (o.uv_checker > 0 && cage.uv_indices.empty())
+    throw InputError(
+        fmt::format("{}: {}: the mesh has no UVs", name, option_name(names, "uv-checker")));
+  GlContext gl;
+  std::optional<GpuOctreeTexture> gpu_texture;
+  if (o.texture) gpu_texture.emplace(*o.texture);
+  RenderTarget target(o.width, o.height, o.samples);
+  RenderedImage out;
+  out.camera = view_of(cage, o);
+  PatchDrawer drawer(cage, table, points);
+  target.begin(o.background);
+  const DrawStats st =
+      drawer.draw(out.camera, draw_options(o, gpu_texture ? &*gpu_texture : nullptr));
+  out.rgba = target.read_rgba();
+  out.report = draw_report(gl, o, out.camera, st);
+  out.report["patches"] = {{"regular", table.regular_params.size()},
+                           {"gregory", table.gregory_params.size()}};
   return out;
 }
 

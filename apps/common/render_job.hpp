@@ -10,6 +10,7 @@
 #include "limn/mesh/mesh.hpp"
 #include "limn/paint/texture.hpp"
 #include "limn/subdiv/depth.hpp"
+#include "limn/subdiv/patches.hpp"
 
 namespace limn::jobs {
 
@@ -21,6 +22,10 @@ struct MeshRender {
   float uv_checker = 0;                    ///< squares per UV unit; 0: off
   const OctreeTexture* texture = nullptr;  ///< colour from a painted texture
   bool nearest = false;                    ///< texture: nearest texel, not filtered
+  // Patches only (render_patches):
+  bool depth_colors = false;        ///< colour by refinement level
+  float pixels_per_segment = 8.0f;  ///< screen-space tessellation, unless factor > 0
+  int factor = 0;                   ///< segments per patch edge (1-32); 0: screen-space
 };
 
 struct RenderedImage {
@@ -33,6 +38,13 @@ struct RenderedImage {
 /// without UVs; std::runtime_error when no OpenGL 4.5 context can be made.
 RenderedImage render_mesh(const Mesh& mesh, const MeshRender& options, std::string_view name,
                           Names names);
+
+/// `limn render --adaptive`: a patch table (its points from `points`, as PatchTable::points or
+/// a hierarchy's for a selection) drawn with tessellation shaders. The report counts patches
+/// (regular, gregory) instead of polygons.
+RenderedImage render_patches(const Mesh& cage, const PatchTable& table,
+                             std::span<const float> points, const MeshRender& options,
+                             std::string_view name, Names names);
 
 /// A camera's report: eye, target, fovy_deg.
 nlohmann::json camera_json(const Camera& c);

@@ -8,8 +8,6 @@
 #include "../common/render_job.hpp"
 #include "gl_commands.hpp"
 #include "limn/paint/file.hpp"
-#include "limn/render/draw.hpp"
-#include "limn/render/gl_context.hpp"
 #include "limn/render/image.hpp"
 
 namespace limn::cli {
@@ -21,53 +19,26 @@ LIMN_GL_ENTRY void limn_cli_render(const RenderJob& job) {
   std::optional<OctreeTexture> texture;
   if (!job.texture.empty()) texture = load_lot(job.texture);
   nlohmann::json timings = {{"read", sw.lap()}};
-  nlohmann::json report;
-  std::vector<uint8_t> rgba;
+  jobs::MeshRender r;
+  r.width = w, r.height = h, r.samples = job.samples;
+  std::copy(job.clear_color, job.clear_color + 4, r.background);
+  r.flat = job.flat, r.wireframe = job.wireframe, r.uv_checker = job.uv_checker;
+  r.texture = texture ? &*texture : nullptr;
+  r.nearest = job.nearest;
+  jobs::RenderedImage image;
   if (job.adaptive) {
-    GlContext gl;
-    timings["context"] = sw.lap();
-    std::optional<GpuOctreeTexture> gpu_texture;
-    if (texture) gpu_texture.emplace(*texture);
-    RenderTarget target(w, h, job.samples);
-    DrawOptions d;
-    d.outline = job.wireframe;
-    d.depth_colors = job.a.depth_colors;
-    d.pixels_per_segment = job.pps;
-    d.factor = job.fixed_tess ? job.a.tess : 0;
-    d.texture = gpu_texture ? &*gpu_texture : nullptr;
-    d.texture_nearest = job.nearest;
-    d.uv_checker = job.uv_checker;
-    if (d.uv_checker > 0 && mesh.uv_indices.empty())
-      throw InputError(fmt::format("{}: --uv-checker: the mesh has no UVs", job.mesh));
     const AdaptiveSurface surf = build_adaptive(mesh, job.a, w, h, sw, timings);
-    PatchDrawer drawer(mesh, surf.table, surf.points);
-    timings["upload"] = sw.lap();
-    target.begin(job.clear_color);
-    const DrawStats st = drawer.draw(surf.cam, d);
-    rgba = target.read_rgba();
-    report = {{"renderer", gl.renderer()},
-              {"resolution", {w, h}},
-              {"camera", jobs::camera_json(surf.cam)},
-              {"drawn", st.patches},
-              {"patches",
-               {{"regular", surf.table.regular_params.size()},
-                {"gregory", surf.table.gregory_params.size()}}},
-              {"triangles", st.triangles},
-              {"gpu_ms", st.gpu_ms},
-              {"cpu_draw_ms", st.cpu_ms}};
+    r.camera = surf.cam;
+    r.depth_colors = job.a.depth_colors;
+    r.pixels_per_segment = job.pps;
+    r.factor = job.fixed_tess ? job.a.tess : 0;
+    image = jobs::render_patches(mesh, surf.table, surf.points, r, job.mesh, jobs::Names::cli);
   } else {
-    jobs::MeshRender r;
-    r.width = w, r.height = h, r.samples = job.samples;
-    std::copy(job.clear_color, job.clear_color + 4, r.background);
     if (!job.a.camera.empty()) r.camera = parse_camera(job.a.camera, Camera{});
-    r.flat = job.flat, r.wireframe = job.wireframe, r.uv_checker = job.uv_checker;
-    r.texture = texture ? &*texture : nullptr;
-    r.nearest = job.nearest;
-    jobs::RenderedImage image = jobs::render_mesh(mesh, r, job.mesh, jobs::Names::cli);
-    rgba = std::move(image.rgba);
-    report = std::move(image.report);
-    report["patches"] = nullptr;
+    image = jobs::render_mesh(mesh, r, job.mesh, jobs::Names::cli);
   }
+  std::vector<uint8_t> rgba = std::move(image.rgba);
+  nlohmann::json report = std::move(image.report);
   timings["draw"] = sw.lap();
   write_png(job.out, w, h, rgba);
   timings["write"] = sw.lap();

@@ -213,6 +213,24 @@ def _hierarchy_select_depths(self, *, camera=None, resolution=(1280, 720), toler
 PatchHierarchy.select_depths = _hierarchy_select_depths
 
 
+def _patch_table_render(self, *, resolution=(1280, 720), camera=None, background=(1.0, 1.0, 1.0),
+                        samples: int = 4, wireframe: bool = False, depth_colors: bool = False,
+                        tess: Optional[int] = None, tess_px: float = 8.0,
+                        texture: Optional[Texture] = None, nearest: bool = False):
+    """``limn render --adaptive``: the patches drawn on the GPU with tessellation shaders
+    (headless; llvmpipe without a GPU) -> :class:`RenderResult`. tess: segments per patch edge
+    (1-32; default: about one per ``tess_px`` pixels of projected edge). depth_colors: colour by
+    refinement level. wireframe: patch outlines. Other options as :func:`render`."""
+    width, height = _size(resolution)
+    image, stats = self._render(width, height, int(samples), _background(background),
+                                _camera_numbers(camera), wireframe, depth_colors,
+                                int(tess or 0), float(tess_px), texture, nearest)
+    return RenderResult(image, stats)
+
+
+PatchTable.render = _patch_table_render
+
+
 def select_depths(mesh: Mesh, *, camera=None, resolution=(1280, 720), tolerance: float = 0.5,
                   max_depth: int = 10) -> np.ndarray:
     """A depth per cage vertex (uint8) for a view from estimated errors (no hierarchy: cheaper,
@@ -229,6 +247,15 @@ class RenderResult:
     (renderer, camera, polygons drawn, triangles, GPU and CPU ms)."""
     image: np.ndarray
     stats: dict[str, Any]
+
+
+def _background(background) -> list[float]:
+    bg = [float(c) for c in background]
+    if len(bg) == 3:
+        bg.append(1.0)
+    if len(bg) != 4 or not all(0.0 <= c <= 1.0 for c in bg):
+        raise InputError(f"background {background}: three or four numbers 0-1")
+    return bg
 
 
 def _camera_numbers(camera) -> Optional[list[float]]:
@@ -252,12 +279,8 @@ def render(mesh: Mesh, *, resolution: tuple[int, int] | str = (1280, 720),
     texture: colour from a painted octree texture (nearest: nearest texel, not filtered).
     """
     width, height = _size(resolution)
-    bg = [float(c) for c in background]
-    if len(bg) == 3:
-        bg.append(1.0)
-    if len(bg) != 4 or not all(0.0 <= c <= 1.0 for c in bg):
-        raise InputError(f"background {background}: three or four numbers 0-1")
-    image, stats = _limn._render_mesh(mesh, int(width), int(height), int(samples), bg,
+    image, stats = _limn._render_mesh(mesh, int(width), int(height), int(samples),
+                                      _background(background),
                                       _camera_numbers(camera), flat, wireframe, float(uv_checker),
                                       texture, nearest)
     return RenderResult(image, stats)

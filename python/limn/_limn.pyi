@@ -88,6 +88,15 @@ class PatchTable:
                  ) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.float32],
                             npt.NDArray[np.float32]]: ...
     def tessellate(self, tess: int = 4, normals: bool = True) -> Mesh: ...
+    def _render(self, width: int, height: int, samples: int, background: Sequence[float],
+                camera: Optional[Sequence[float]], wireframe: bool, depth_colors: bool, tess: int,
+                tess_px: float, texture: Optional[Texture],
+                nearest: bool) -> tuple[npt.NDArray[np.uint8], dict[str, Any]]: ...
+    def render(self, *, resolution: Any = (1280, 720), camera: Any = None,
+               background: Sequence[float] = (1.0, 1.0, 1.0), samples: int = 4,
+               wireframe: bool = False, depth_colors: bool = False, tess: Optional[int] = None,
+               tess_px: float = 8.0, texture: Optional[Texture] = None,
+               nearest: bool = False) -> Any: ...
 
 class PatchHierarchy:
     """Every patch a cage can need down to max_depth, with measured errors."""

@@ -11,10 +11,13 @@
 
 #include "arrays.hpp"
 #include "bindings.hpp"
+#include "jobs.hpp"
+#include "limn/paint/texture.hpp"
 #include "limn/subdiv/depth.hpp"
 #include "limn/subdiv/patches.hpp"
 #include "limn/subdiv/refine.hpp"
 #include "limn/subdiv/tessellate.hpp"
+#include "render_job.hpp"
 
 namespace limn::py_bind {
 
@@ -132,6 +135,36 @@ extraordinary vertices isolated to their depth. Evaluates the limit surface exac
           py::arg("ptex"), py::arg("u"), py::arg("v"),
           R"(Limit positions and first derivatives (per ptex unit) at (ptex, u, v) arrays:
 (positions, du, dv), each (n, 3) float32. u, v in [0, 1].)")
+      .def(
+          "_render",
+          [](const Patches& p, int width, int height, int samples, std::array<float, 4> background,
+             std::optional<std::array<float, 7>> camera, bool wireframe, bool depth_colors,
+             int tess, float tess_px, const OctreeTexture* texture, bool nearest) {
+            if (samples < 1 || samples > 16)
+              throw InputError(fmt::format("samples {}: must be 1-16", samples));
+            if (tess < 0 || tess > 32) throw InputError(fmt::format("tess {}: must be 1-32", tess));
+            if (!(tess_px > 0 && std::isfinite(tess_px)))
+              throw InputError(
+                  fmt::format("tess_px {}: must be a positive number of pixels", tess_px));
+            jobs::MeshRender r;
+            r.width = width, r.height = height, r.samples = samples;
+            std::copy(background.begin(), background.end(), r.background);
+            r.camera = view_camera(p.cage, width, height, camera);
+            r.wireframe = wireframe, r.depth_colors = depth_colors;
+            r.factor = tess, r.pixels_per_segment = tess_px;
+            r.texture = texture, r.nearest = nearest;
+            jobs::RenderedImage image;
+            {
+              py::gil_scoped_release unlocked;
+              image =
+                  jobs::render_patches(p.cage, p.table, p.points, r, "mesh", jobs::Names::python);
+            }
+            return py::make_tuple(owned(std::move(image.rgba), {height, width, 4}),
+                                  to_python(image.report));
+          },
+          py::arg("width"), py::arg("height"), py::arg("samples"), py::arg("background"),
+          py::arg("camera"), py::arg("wireframe"), py::arg("depth_colors"), py::arg("tess"),
+          py::arg("tess_px"), py::arg("texture"), py::arg("nearest"))
       .def(
           "tessellate",
           [](const Patches& p, int tess, bool normals) {

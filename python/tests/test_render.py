@@ -38,3 +38,20 @@ def test_camera_round_trips_and_png_files(tmp_path):
     with pytest.raises(limn.InputError, match="bad.png: not a readable image"):
         (tmp_path / "bad.png").write_bytes(b"not a png")
         limn.read_png(tmp_path / "bad.png")
+
+
+def test_patch_render_equals_the_cli(tmp_path, cli):
+    cage = limn.shape("torus")
+    limn.write_mesh(cage, tmp_path / "torus.obj")
+    expected = cli("render", tmp_path / "torus.obj", "-o", tmp_path / "cli.png", "--adaptive",
+                   "--depth", 3, "--depth-colors", "--wireframe", "--resolution", "160x96",
+                   "--samples", 1, json_out=True)
+    result = limn.patches(cage, depth=3).render(resolution=(160, 96), depth_colors=True,
+                                                wireframe=True, samples=1)
+    assert np.array_equal(result.image, limn.read_png(tmp_path / "cli.png"))
+    for key in ("camera", "drawn", "patches", "triangles"):
+        assert result.stats[key] == expected[key], key
+    fixed = limn.patches(cage, depth=3).render(resolution=(64, 48), tess=2, samples=1)
+    assert fixed.stats["triangles"] > 0
+    with pytest.raises(limn.InputError, match="tess 40"):
+        limn.patches(cage, depth=3).render(tess=40)
