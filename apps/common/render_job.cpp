@@ -40,18 +40,11 @@ DrawOptions draw_options(const MeshRender& o, const GpuOctreeTexture* texture) {
   return d;
 }
 
-nlohmann::json draw_report(const GlContext& gl, const MeshRender& o, const Camera& cam,
-                           const DrawStats& st) {
-  return {{"renderer", gl.renderer()},  {"resolution", {o.width, o.height}},
-          {"camera", camera_json(cam)}, {"drawn", st.patches},
-          {"triangles", st.triangles},  {"gpu_ms", st.gpu_ms},
-          {"cpu_draw_ms", st.cpu_ms}};
-}
-
-}  // namespace
-
-RenderedImage render_mesh(const Mesh& mesh, const MeshRender& o, std::string_view name,
-                          Names names) {
+// The steps every render shares: a context, the texture on the GPU, the target, the camera;
+// `make_drawer` builds the drawer once the context is current.
+template <class MakeDrawer>
+RenderedImage render_with(const Mesh& mesh, const MeshRender& o, std::string_view name, Names names,
+                          MakeDrawer make_drawer) {
   if (o.uv_checker > 0 && mesh.uv_indices.empty())
     throw InputError(
         fmt::format("{}: {}: the mesh has no UVs", name, option_name(names, "uv-checker")));
@@ -61,12 +54,24 @@ RenderedImage render_mesh(const Mesh& mesh, const MeshRender& o, std::string_vie
   RenderTarget target(o.width, o.height, o.samples);
   RenderedImage out;
   out.camera = view_of(mesh, o);
-  MeshDrawer drawer(mesh, {}, o.flat);
+  auto drawer = make_drawer();
   target.begin(o.background);
   const DrawStats st =
       drawer.draw(out.camera, draw_options(o, gpu_texture ? &*gpu_texture : nullptr));
   out.rgba = target.read_rgba();
-  out.report = draw_report(gl, o, out.camera, st);
+  out.report = {{"renderer", gl.renderer()},         {"resolution", {o.width, o.height}},
+                {"camera", camera_json(out.camera)}, {"drawn", st.patches},
+                {"triangles", st.triangles},         {"gpu_ms", st.gpu_ms},
+                {"cpu_draw_ms", st.cpu_ms}};
+  return out;
+}
+
+}  // namespace
+
+RenderedImage render_mesh(const Mesh& mesh, const MeshRender& o, std::string_view name,
+                          Names names) {
+  RenderedImage out =
+      render_with(mesh, o, name, names, [&] { return MeshDrawer(mesh, {}, o.flat); });
   out.report["patches"] = nullptr;
   return out;
 }
@@ -74,21 +79,8 @@ RenderedImage render_mesh(const Mesh& mesh, const MeshRender& o, std::string_vie
 RenderedImage render_patches(const Mesh& cage, const PatchTable& table,
                              std::span<const float> points, const MeshRender& o,
                              std::string_view name, Names names) {
-  if (o.uv_checker > 0 && cage.uv_indices.empty())
-    throw InputError(
-        fmt::format("{}: {}: the mesh has no UVs", name, option_name(names, "uv-checker")));
-  GlContext gl;
-  std::optional<GpuOctreeTexture> gpu_texture;
-  if (o.texture) gpu_texture.emplace(*o.texture);
-  RenderTarget target(o.width, o.height, o.samples);
-  RenderedImage out;
-  out.camera = view_of(cage, o);
-  PatchDrawer drawer(cage, table, points);
-  target.begin(o.background);
-  const DrawStats st =
-      drawer.draw(out.camera, draw_options(o, gpu_texture ? &*gpu_texture : nullptr));
-  out.rgba = target.read_rgba();
-  out.report = draw_report(gl, o, out.camera, st);
+  RenderedImage out =
+      render_with(cage, o, name, names, [&] { return PatchDrawer(cage, table, points); });
   out.report["patches"] = {{"regular", table.regular_params.size()},
                            {"gregory", table.gregory_params.size()}};
   return out;
