@@ -111,8 +111,10 @@ def test_long_calls_release_the_gil():
         thread.join()
     assert end - start > 0.05, "the call was too short to tell"
     during = [t for t in ticks if start < t < end]
-    # With the GIL held the counter would stall for the whole call.
-    assert len(during) >= 0.3 * (end - start) / 0.0011
+    # With the GIL held the counter stalls for the whole call (one tick at most); released, it
+    # ticks on, though it shares the cores with the call's threads (and another test under
+    # ctest -j2), so a tenth of the ticks an idle machine would give is asked for.
+    assert len(during) >= 0.1 * (end - start) / 0.0011
     assert result.mesh.face_count == cage.corner_count * 4 ** 3
 
 
