@@ -1,12 +1,11 @@
 #include "jobs.hpp"
 
 #include <fmt/format.h>
+#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 
 #include <cmath>
 #include <stdexcept>
-
-#include <tbb/global_control.h>
-#include <tbb/task_arena.h>
 
 #include "limn/paint/brush.hpp"
 #include "limn/simplify/distance.hpp"
@@ -23,6 +22,15 @@ std::string option_name(Names names, std::string_view dashed) {
   for (char& c : s)
     if (c == '-') c = '_';
   return s;
+}
+
+Camera view_camera(const Mesh& mesh, int width, int height, const std::optional<Camera>& view) {
+  Camera cam = frame_camera(mesh, width, height);
+  if (view) {
+    for (int k = 0; k < 3; ++k) cam.eye[k] = view->eye[k], cam.target[k] = view->target[k];
+    cam.fovy_deg = view->fovy_deg;
+  }
+  return cam;
 }
 
 void check(const SimplifyJob& o, Names names) {
@@ -85,10 +93,14 @@ SimplifyOutcome simplify(const Mesh& mesh, const SimplifyJob& o, std::string_vie
   return out;
 }
 
-UniformOutcome subdivide_uniform(const Mesh& cage, int level, bool limit, std::string_view name,
-                                 Names names) {
+void check_uniform(int level, Names names) {
   if (level < 0 || level > 8)
     throw InputError(fmt::format("{} {}: level must be 0-8", option_name(names, "uniform"), level));
+}
+
+UniformOutcome subdivide_uniform(const Mesh& cage, int level, bool limit, std::string_view name,
+                                 Names names) {
+  check_uniform(level, names);
   // Every level multiplies corners by 4 (after the first, which makes one quad per corner).
   // The lean path needs ~70 bytes per output quad; with limit every level, its stencils and the
   // limit masks are kept (~500 bytes per quad).
@@ -183,6 +195,12 @@ UniformOutcome subdivide_uniform(const Mesh& cage, int level, bool limit, std::s
                       {"stencil_entries", k == 0 ? 0 : r.stencils[k - 1].indices.size()}});
   }
   return result;
+}
+
+void check_paint_depth(int depth, Names names) {
+  if (depth < 1 || depth > octree::kMaxDepth)
+    throw InputError(
+        fmt::format("{} {}: must be 1-{}", option_name(names, "depth"), depth, octree::kMaxDepth));
 }
 
 PaintOutcome paint(const Mesh& mesh, const StrokeScript& script, Rgba8 background,

@@ -11,6 +11,7 @@
 #include "limn/mesh/mesh.hpp"
 #include "limn/paint/strokes.hpp"
 #include "limn/simplify/vsa.hpp"
+#include "limn/subdiv/depth.hpp"
 
 namespace limn::jobs {
 
@@ -19,6 +20,10 @@ namespace limn::jobs {
 enum class Names { cli, python };
 /// `dashed` ("target-error") as the caller spells it.
 std::string option_name(Names names, std::string_view dashed);
+
+/// The camera of a view: `mesh` framed for a width x height image (frame_camera), with the eye,
+/// target and fovy of `view` when given (its up and image size are not used).
+Camera view_camera(const Mesh& mesh, int width, int height, const std::optional<Camera>& view);
 
 /// `limn simplify`'s options (its defaults; names as its flags).
 struct SimplifyJob {
@@ -54,6 +59,8 @@ struct UniformOutcome {
   nlohmann::json levels;   ///< per level: vertices, faces, edges, stencil entries
   nlohmann::json timings;  ///< ms per phase
 };
+/// InputError for a level outside 0-8 (checked before any work: no file needs reading first).
+void check_uniform(int level, Names names);
 /// InputError for a level outside 0-8 or an output past limn's size cap.
 UniformOutcome subdivide_uniform(const Mesh& cage, int level, bool limit, std::string_view name,
                                  Names names);
@@ -67,6 +74,8 @@ struct PaintOutcome {
   /// the texture and the painting
   nlohmann::json report;
 };
+/// InputError for a paint depth outside 1-octree::kMaxDepth.
+void check_paint_depth(int depth, Names names);
 PaintOutcome paint(const Mesh& mesh, const StrokeScript& script, Rgba8 background,
                    std::optional<OctreeTexture> start);
 

@@ -16,18 +16,6 @@ nlohmann::json camera_json(const Camera& c) {
 
 namespace {
 
-// The camera a render uses: the cage framed for the image size, with the options' eye, target
-// and fovy when given.
-Camera view_of(const Mesh& mesh, const MeshRender& o) {
-  Camera cam = frame_camera(mesh, o.width, o.height);
-  if (o.camera) {
-    for (int k = 0; k < 3; ++k) cam.eye[k] = o.camera->eye[k];
-    for (int k = 0; k < 3; ++k) cam.target[k] = o.camera->target[k];
-    cam.fovy_deg = o.camera->fovy_deg;
-  }
-  return cam;
-}
-
 DrawOptions draw_options(const MeshRender& o, const GpuOctreeTexture* texture) {
   DrawOptions d;
   d.outline = o.wireframe;
@@ -53,7 +41,7 @@ RenderedImage render_with(const Mesh& mesh, const MeshRender& o, std::string_vie
   if (o.texture) gpu_texture.emplace(*o.texture);
   RenderTarget target(o.width, o.height, o.samples);
   RenderedImage out;
-  out.camera = view_of(mesh, o);
+  out.camera = view_camera(mesh, o.width, o.height, o.camera);
   auto drawer = make_drawer();
   target.begin(o.background);
   const DrawStats st =

@@ -17,7 +17,7 @@ namespace limn::jobs {
 struct MeshRender {
   int width = 1280, height = 720, samples = 4;
   float background[4] = {1, 1, 1, 1};
-  std::optional<Camera> camera;  ///< eye, target, fovy (the image size is set here); none: framed
+  std::optional<Camera> camera;  ///< eye, target, fovy (view_camera); none: the mesh framed
   bool flat = false, wireframe = false;
   float uv_checker = 0;                    ///< squares per UV unit; 0: off
   const OctreeTexture* texture = nullptr;  ///< colour from a painted texture

@@ -133,8 +133,7 @@ void add_paint(CLI::App& app) {
     }
     if (o->mesh.empty() || o->strokes.empty() || o->out.empty())
       throw InputError("paint needs MESH, --strokes FILE and -o TEXTURE.lot (or --stats TEXTURE)");
-    if (o->depth < 1 || o->depth > octree::kMaxDepth)
-      throw InputError(fmt::format("--depth {}: must be 1-{}", o->depth, octree::kMaxDepth));
+    jobs::check_paint_depth(o->depth, jobs::Names::cli);
     run_paint(*o);
   });
 }

@@ -161,6 +161,7 @@ void add_subdivide(CLI::App& app) {
       run_adaptive(o->mesh, o->out, o->format, o->weld, o->repair, o->a, o->json);
       return;
     }
+    jobs::check_uniform(o->uniform, jobs::Names::cli);
     if (format_from_path(o->out) == MeshFormat::automatic)
       throw InputError(fmt::format("{}: cannot tell the output format from the extension", o->out));
     Stopwatch sw;

@@ -3,7 +3,11 @@
 
 #include <pybind11/pybind11.h>
 
+#include <array>
 #include <nlohmann/json.hpp>
+#include <optional>
+
+#include "limn/subdiv/depth.hpp"
 
 namespace limn::py_bind {
 
@@ -11,6 +15,12 @@ namespace py = pybind11;
 
 /// A JSON report as Python objects (dict, list, str, int, float, bool, None).
 py::object to_python(const nlohmann::json& j);
+
+/// A camera given as (ex, ey, ez, tx, ty, tz, fovy_deg), checked (finite, 0 < fovy < 180);
+/// none stays none (the mesh framed, jobs::view_camera).
+std::optional<Camera> camera_arg(const std::optional<std::array<float, 7>>& camera);
+/// InputError unless the image is 1-16384 pixels a side and samples 1-16.
+void check_image(int width, int height, int samples);
 
 void bind_mesh(py::module_& m);     ///< Mesh, read_mesh, _write_mesh, _info
 void bind_jobs(py::module_& m);     ///< _simplify, _subdivide_uniform, _repair

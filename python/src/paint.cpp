@@ -46,6 +46,13 @@ struct Painter {
   int depth = 10;
 };
 
+// A new texture's background colour, checked (RGBA in [0, 1]).
+Rgba8 background_arg(const std::array<float, 4>& background) {
+  for (float c : background)
+    if (!(c >= 0 && c <= 1)) throw InputError("background: components must be numbers in [0, 1]");
+  return rgba8_from_float(background.data());
+}
+
 }  // namespace
 
 void bind_paint(py::module_& m) {
@@ -125,18 +132,13 @@ wider than a leaf blends the mip levels it spans.)");
 texture, each undoable (undo/redo), the surface's BVH built once.)")
       .def(py::init([](const Mesh& mesh, const OctreeTexture* texture,
                        std::array<float, 4> background, int depth) {
-             if (depth < 1 || depth > octree::kMaxDepth)
-               throw InputError(fmt::format("depth {}: must be 1-{}", depth, octree::kMaxDepth));
-             for (float c : background)
-               if (!(c >= 0 && c <= 1))
-                 throw InputError("background: components must be numbers in [0, 1]");
+             jobs::check_paint_depth(depth, jobs::Names::python);
+             const Rgba8 bg = background_arg(background);
              auto p = std::make_unique<Painter>();
              py::gil_scoped_release unlocked;
              p->mesh = mesh;
              p->surface = std::make_unique<PaintSurface>(p->mesh);
-             p->texture =
-                 texture ? *texture
-                         : OctreeTexture::create(*p->surface, rgba8_from_float(background.data()));
+             p->texture = texture ? *texture : OctreeTexture::create(*p->surface, bg);
              p->depth = depth;
              return p;
            }),
@@ -201,18 +203,15 @@ texture, each undoable (undo/redo), the surface's BVH built once.)")
       "_paint",
       [](const Mesh& mesh, const std::string& strokes_json, const std::string& name, int depth,
          std::array<float, 4> background, const OctreeTexture* start) {
-        if (depth < 1 || depth > octree::kMaxDepth)
-          throw InputError(fmt::format("depth {}: must be 1-{}", depth, octree::kMaxDepth));
-        for (float c : background)
-          if (!(c >= 0 && c <= 1))
-            throw InputError("background: components must be numbers in [0, 1]");
+        jobs::check_paint_depth(depth, jobs::Names::python);
+        const Rgba8 bg = background_arg(background);
         const StrokeScript script = parse_strokes(strokes_json, name, depth);
         std::optional<OctreeTexture> first;
         if (start) first = *start;  // a copy: the caller's texture stays as it was
         jobs::PaintOutcome out;
         {
           py::gil_scoped_release unlocked;
-          out = jobs::paint(mesh, script, rgba8_from_float(background.data()), std::move(first));
+          out = jobs::paint(mesh, script, bg, std::move(first));
         }
         nlohmann::json report = std::move(out.report);
         report["depth"] = depth;

@@ -43,21 +43,14 @@ struct Patches {
   std::shared_ptr<Hierarchy> from;
 };
 
-// A view's camera: the framed one for the image size, with eye, target and fovy when given.
-Camera view_camera(const Mesh& cage, int width, int height,
-                   const std::optional<std::array<float, 7>>& c) {
+// The camera a view's depths are chosen for, with the options every depth selection checks.
+Camera depth_view(const Mesh& cage, int width, int height,
+                  const std::optional<std::array<float, 7>>& camera, float tolerance) {
   if (width < 1 || height < 1 || width > 32768 || height > 32768)
     throw InputError(fmt::format("resolution {}x{}: each side must be 1-32768", width, height));
-  Camera cam = frame_camera(cage, width, height);
-  if (c) {
-    for (float x : *c)
-      if (!std::isfinite(x)) throw InputError("camera: not finite");
-    if (!((*c)[6] > 0 && (*c)[6] < 180))
-      throw InputError(fmt::format("camera: fovy_deg {} must be in (0, 180)", (*c)[6]));
-    for (int k = 0; k < 3; ++k) cam.eye[k] = (*c)[size_t(k)], cam.target[k] = (*c)[size_t(k) + 3];
-    cam.fovy_deg = (*c)[6];
-  }
-  return cam;
+  if (!(tolerance > 0 && std::isfinite(tolerance)))
+    throw InputError(fmt::format("tolerance {}: must be a positive number of pixels", tolerance));
+  return jobs::view_camera(cage, width, height, camera_arg(camera));
 }
 
 std::vector<uint8_t> depths_arg(py::handle depths, size_t vertices, const char* what) {
@@ -140,8 +133,7 @@ extraordinary vertices isolated to their depth. Evaluates the limit surface exac
           [](const Patches& p, int width, int height, int samples, std::array<float, 4> background,
              std::optional<std::array<float, 7>> camera, bool wireframe, bool depth_colors,
              int tess, float tess_px, const OctreeTexture* texture, bool nearest) {
-            if (samples < 1 || samples > 16)
-              throw InputError(fmt::format("samples {}: must be 1-16", samples));
+            check_image(width, height, samples);
             if (tess < 0 || tess > 32) throw InputError(fmt::format("tess {}: must be 1-32", tess));
             if (!(tess_px > 0 && std::isfinite(tess_px)))
               throw InputError(
@@ -149,7 +141,7 @@ extraordinary vertices isolated to their depth. Evaluates the limit surface exac
             jobs::MeshRender r;
             r.width = width, r.height = height, r.samples = samples;
             std::copy(background.begin(), background.end(), r.background);
-            r.camera = view_camera(p.cage, width, height, camera);
+            r.camera = camera_arg(camera);
             r.wireframe = wireframe, r.depth_colors = depth_colors;
             r.factor = tess, r.pixels_per_segment = tess_px;
             r.texture = texture, r.nearest = nearest;
@@ -218,12 +210,9 @@ select their patches without refining again.)")
           "_select_depths",  // limn/__init__.py wraps it as select_depths
           [](const Hierarchy& h, int width, int height, std::optional<std::array<float, 7>> camera,
              float tolerance, py::handle previous) {
-            if (!(tolerance > 0 && std::isfinite(tolerance)))
-              throw InputError(
-                  fmt::format("tolerance {}: must be a positive number of pixels", tolerance));
+            const Camera cam = depth_view(h.cage, width, height, camera, tolerance);
             std::vector<uint8_t> prev;
             if (!previous.is_none()) prev = depths_arg(previous, h.cage.vertex_count(), "previous");
-            const Camera cam = view_camera(h.cage, width, height, camera);
             DepthOptions d;
             d.tolerance_px = tolerance;
             d.max_depth = h.max_depth;
@@ -278,12 +267,9 @@ select their patches without refining again.)")
       "_estimate_depths",
       [](const Mesh& cage, int width, int height, std::optional<std::array<float, 7>> camera,
          float tolerance, int max_depth) {
-        if (!(tolerance > 0 && std::isfinite(tolerance)))
-          throw InputError(
-              fmt::format("tolerance {}: must be a positive number of pixels", tolerance));
+        const Camera cam = depth_view(cage, width, height, camera, tolerance);
         if (max_depth < 0 || max_depth > 16)
           throw InputError(fmt::format("max_depth {}: must be 0-16", max_depth));
-        const Camera cam = view_camera(cage, width, height, camera);
         DepthOptions d;
         d.tolerance_px = tolerance;
         d.max_depth = max_depth;

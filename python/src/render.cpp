@@ -14,33 +14,39 @@
 
 namespace limn::py_bind {
 
+std::optional<Camera> camera_arg(const std::optional<std::array<float, 7>>& camera) {
+  if (!camera) return std::nullopt;
+  const std::array<float, 7>& c = *camera;
+  for (float x : c)
+    if (!std::isfinite(x)) throw InputError("camera: not finite");
+  if (!(c[6] > 0 && c[6] < 180))
+    throw InputError(fmt::format("camera: fovy_deg {} must be in (0, 180)", c[6]));
+  Camera cam;
+  for (int k = 0; k < 3; ++k) cam.eye[k] = c[size_t(k)], cam.target[k] = c[size_t(k) + 3];
+  cam.fovy_deg = c[6];
+  return cam;
+}
+
+void check_image(int width, int height, int samples) {
+  if (width < 1 || height < 1 || width > 16384 || height > 16384)
+    throw InputError(fmt::format("resolution {}x{}: each side must be 1-16384", width, height));
+  if (samples < 1 || samples > 16)
+    throw InputError(fmt::format("samples {}: must be 1-16", samples));
+}
+
 void bind_render(py::module_& m) {
   m.def(
       "_render_mesh",
       [](const Mesh& mesh, int width, int height, int samples, std::array<float, 4> background,
          std::optional<std::array<float, 7>> camera, bool flat, bool wireframe, float uv_checker,
          const OctreeTexture* texture, bool nearest) {
-        jobs::MeshRender r;
-        if (width < 1 || height < 1 || width > 16384 || height > 16384)
-          throw InputError(
-              fmt::format("resolution {}x{}: each side must be 1-16384", width, height));
-        if (samples < 1 || samples > 16)
-          throw InputError(fmt::format("samples {}: must be 1-16", samples));
+        check_image(width, height, samples);
         if (!(uv_checker >= 0 && uv_checker <= 1024))
           throw InputError(fmt::format("uv_checker {}: squares per UV unit, 0-1024", uv_checker));
+        jobs::MeshRender r;
         r.width = width, r.height = height, r.samples = samples;
         std::copy(background.begin(), background.end(), r.background);
-        if (camera) {
-          const std::array<float, 7>& c = *camera;
-          for (float x : c)
-            if (!std::isfinite(x)) throw InputError("camera: not finite");
-          if (!(c[6] > 0 && c[6] < 180))
-            throw InputError(fmt::format("camera: fovy_deg {} must be in (0, 180)", c[6]));
-          Camera cam;
-          for (int k = 0; k < 3; ++k) cam.eye[k] = c[size_t(k)], cam.target[k] = c[size_t(k) + 3];
-          cam.fovy_deg = c[6];
-          r.camera = cam;
-        }
+        r.camera = camera_arg(camera);
         r.flat = flat, r.wireframe = wireframe, r.uv_checker = uv_checker;
         r.texture = texture, r.nearest = nearest;
         jobs::RenderedImage image;
