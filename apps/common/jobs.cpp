@@ -98,9 +98,16 @@ void check_uniform(int level, Names names) {
     throw InputError(fmt::format("{} {}: level must be 0-8", option_name(names, "uniform"), level));
 }
 
-UniformOutcome subdivide_uniform(const Mesh& cage, int level, bool limit, std::string_view name,
-                                 Names names) {
-  check_uniform(level, names);
+namespace {
+
+// The refined mesh with its per-level counts and phase timings.
+struct Refined {
+  Mesh mesh;
+  nlohmann::json levels = nlohmann::json::array(), timings = nlohmann::json::object();
+};
+
+Refined refine_uniform_job(const Mesh& cage, int level, bool limit, std::string_view name,
+                           Names names) {
   // Every level multiplies corners by 4 (after the first, which makes one quad per corner).
   // The lean path needs ~70 bytes per output quad; with limit every level, its stencils and the
   // limit masks are kept (~500 bytes per quad).
@@ -111,7 +118,7 @@ UniformOutcome subdivide_uniform(const Mesh& cage, int level, bool limit, std::s
                                  name, level, limit ? " with " + option_name(names, "limit") : "",
                                  faces, cap));
   const SubdivOptions options = subdiv_options(cage);
-  UniformOutcome result{{}, nlohmann::json::array(), nlohmann::json::object()};
+  Refined result;
   Mesh& out = result.mesh;
   nlohmann::json& levels = result.levels;
   nlohmann::json& timings = result.timings;
@@ -195,6 +202,21 @@ UniformOutcome subdivide_uniform(const Mesh& cage, int level, bool limit, std::s
                       {"stencil_entries", k == 0 ? 0 : r.stencils[k - 1].indices.size()}});
   }
   return result;
+}
+
+}  // namespace
+
+UniformOutcome subdivide_uniform(const Mesh& cage, int level, bool limit, std::string_view name,
+                                 Names names) {
+  check_uniform(level, names);
+  Refined r = refine_uniform_job(cage, level, limit, name, names);
+  nlohmann::json report = {{"level", level},
+                           {"limit", limit},
+                           {"levels", std::move(r.levels)},
+                           {"output_vertices", r.mesh.vertex_count()},
+                           {"output_faces", r.mesh.face_count()},
+                           {"timings_ms", std::move(r.timings)}};
+  return {std::move(r.mesh), std::move(report)};
 }
 
 void check_paint_depth(int depth, Names names) {

@@ -56,8 +56,9 @@ SimplifyOutcome simplify(const Mesh& mesh, const SimplifyJob& job, std::string_v
 /// limit normals, UVs and colours. Remaining sharpness comes out as crease and corner tags.
 struct UniformOutcome {
   Mesh mesh;
-  nlohmann::json levels;   ///< per level: vertices, faces, edges, stencil entries
-  nlohmann::json timings;  ///< ms per phase
+  /// level, limit, levels (per level: vertices, faces, edges, stencil entries), the output's
+  /// vertices and faces, timings_ms (per phase)
+  nlohmann::json report;
 };
 /// InputError for a level outside 0-8 (checked before any work: no file needs reading first).
 void check_uniform(int level, Names names);

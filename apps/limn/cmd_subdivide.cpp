@@ -171,24 +171,18 @@ void add_subdivide(CLI::App& app) {
     jobs::UniformOutcome result =
         jobs::subdivide_uniform(cage, o->uniform, o->limit, o->mesh, jobs::Names::cli);
     const Mesh& out = result.mesh;
-    const nlohmann::json& levels = result.levels;
-    nlohmann::json timings = result.timings;
-    timings["read"] = t_read;
     sw.lap();
     const nlohmann::json dropped = write_output(out, o->out);
-    timings["write"] = sw.lap();
+    const double t_write = sw.lap();
 
     if (o->json) {
-      nlohmann::json j = {{"input", o->mesh},
-                          {"repair", repaired},
-                          {"output", o->out},
-                          {"level", o->uniform},
-                          {"limit", o->limit},
-                          {"levels", levels},
-                          {"output_vertices", out.vertex_count()},
-                          {"output_faces", out.face_count()},
-                          {"dropped", dropped},
-                          {"timings_ms", timings}};
+      nlohmann::json j = std::move(result.report);
+      j["input"] = o->mesh;
+      j["repair"] = repaired;
+      j["output"] = o->out;
+      j["dropped"] = dropped;
+      j["timings_ms"]["read"] = t_read;
+      j["timings_ms"]["write"] = t_write;
       fmt::print("{}\n", j.dump(2));
     } else {
       fmt::print("{} -> {}: level {}{}, {} vertices, {} faces ({:.1f} ms)\n", o->mesh, o->out,
