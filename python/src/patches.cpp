@@ -34,13 +34,26 @@ struct Hierarchy {
 };
 
 // A table with the cage it was built from and its points, ready to evaluate. A selection from a
-// hierarchy evaluates over the hierarchy's points (`from`).
+// hierarchy (`from`) reads the hierarchy's cage and points, shared by every selection: nothing
+// is copied per view, and a pose set through one selection is every selection's.
 struct Patches {
-  Mesh cage;
   PatchTable table;
-  std::vector<float> points;
   std::unique_ptr<PatchMap> map;
   std::shared_ptr<Hierarchy> from;
+  Mesh own_cage;  // a table of its own (patches()): its cage and points
+  std::vector<float> own_points;
+
+  const Mesh& cage() const { return from ? from->cage : own_cage; }
+  const std::vector<float>& points() const { return from ? from->points : own_points; }
+  // Sets new cage positions and the patch points from them (same vertex count).
+  void pose(std::vector<float> positions) {
+    Mesh& c = from ? from->cage : own_cage;
+    c.positions = std::move(positions);
+    if (from)
+      from->points = from->hierarchy.table.points(c.positions);
+    else
+      own_points = table.points(c.positions);
+  }
 };
 
 // The camera a view's depths are chosen for, with the options every depth selection checks.
@@ -77,7 +90,7 @@ extraordinary vertices isolated to their depth. Evaluates the limit surface exac
           "ptex_count", [](const Patches& p) { return p.table.ptex_count; },
           "Ptex faces: one per cage quad, one per corner of other faces.")
       .def_property_readonly(
-          "point_count", [](const Patches& p) { return p.points.size() / 3; },
+          "point_count", [](const Patches& p) { return p.points().size() / 3; },
           "Control points the patches read (cage, refined and end-cap points).")
       .def_property_readonly(
           "ptex_of_face",
@@ -87,21 +100,15 @@ extraordinary vertices isolated to their depth. Evaluates the limit surface exac
           "update",
           [](Patches& p, py::handle positions) {
             std::vector<float> cage = floats(positions, "positions", 3);
-            if (cage.size() != p.cage.positions.size())
+            if (cage.size() != p.cage().positions.size())
               throw InputError(fmt::format("positions: {} rows, the cage has {}", cage.size() / 3,
-                                           p.cage.vertex_count()));
+                                           p.cage().vertex_count()));
             py::gil_scoped_release unlocked;
-            p.cage.positions = std::move(cage);
-            if (p.from) {  // a selection: its hierarchy's points, shared with other selections
-              p.from->cage.positions = p.cage.positions;
-              p.from->points = p.from->hierarchy.table.points(p.cage.positions);
-              p.points = p.from->points;
-            } else {
-              p.points = p.table.points(p.cage.positions);
-            }
+            p.pose(std::move(cage));
           },
           py::arg("positions"),
-          "New cage positions (an animated cage): the patch points again, nothing refined.")
+          "New cage positions (an animated cage): the patch points again, nothing refined. For "
+          "a selection, the hierarchy's points: every selection from it sees the new pose.")
       .def(
           "evaluate",
           [](const Patches& p, py::handle ptex, py::handle u, py::handle v) {
@@ -119,7 +126,7 @@ extraordinary vertices isolated to their depth. Evaluates the limit surface exac
               py::gil_scoped_release unlocked;
               std::vector<PatchCoord> coords(n);
               for (size_t i = 0; i < n; ++i) coords[i] = p.map->find(faces[i], us[i], vs[i]);
-              evaluate_patches(p.table, p.points, coords, pos.data(), du.data(), dv.data());
+              evaluate_patches(p.table, p.points(), coords, pos.data(), du.data(), dv.data());
             }
             const auto rows = py::ssize_t(n);
             return py::make_tuple(owned(std::move(pos), {rows, 3}), owned(std::move(du), {rows, 3}),
@@ -148,8 +155,8 @@ extraordinary vertices isolated to their depth. Evaluates the limit surface exac
             jobs::RenderedImage image;
             {
               py::gil_scoped_release unlocked;
-              image =
-                  jobs::render_patches(p.cage, p.table, p.points, r, "mesh", jobs::Names::python);
+              image = jobs::render_patches(p.cage(), p.table, p.points(), r, "mesh",
+                                           jobs::Names::python);
             }
             return py::make_tuple(owned(std::move(image.rgba), {height, width, 4}),
                                   to_python(image.report));
@@ -165,7 +172,7 @@ extraordinary vertices isolated to their depth. Evaluates the limit surface exac
             o.factor = tess;
             o.normals = normals;
             py::gil_scoped_release unlocked;
-            return tessellate_patches(p.cage, p.table, p.points, o);
+            return tessellate_patches(p.cage(), p.table, p.points(), o);
           },
           py::arg("tess") = 4, py::arg("normals") = true,
           "A watertight mesh of the limit surface: `tess` segments per patch edge (1-64), with "
@@ -185,12 +192,12 @@ extraordinary vertices isolated to their depth. Evaluates the limit surface exac
         auto p = std::make_unique<Patches>();
         {
           py::gil_scoped_release unlocked;
-          p->cage = cage;
+          p->own_cage = cage;
           PatchOptions o;
           o.subdiv = subdiv_options(cage);
           o.depth = depth;
           p->table = build_patches(cage, o, vdepth);
-          p->points = p->table.points(cage.positions);
+          p->own_points = p->table.points(cage.positions);
           p->map = std::make_unique<PatchMap>(p->table);
         }
         return p;
@@ -234,9 +241,7 @@ select their patches without refining again.)")
             auto p = std::make_unique<Patches>();
             {
               py::gil_scoped_release unlocked;
-              p->cage = h->cage;
               p->table = select_patches(h->hierarchy, vdepth);
-              p->points = h->points;
               p->map = std::make_unique<PatchMap>(p->table);
               p->from = h;
             }

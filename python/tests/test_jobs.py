@@ -232,3 +232,16 @@ def test_view_dependent_depths_as_the_cli(tmp_path, cli):
     assert near.max() >= depths.max()
     with pytest.raises(limn.InputError, match="tolerance"):
         h.select_depths(tolerance=0)
+
+
+def test_selections_share_their_hierarchy_and_its_pose():
+    cage = limn.shape("torus")
+    h = limn.patch_hierarchy(cage, max_depth=4)
+    far = h.select(np.full(cage.vertex_count, 1, np.uint8))
+    near = h.select(np.full(cage.vertex_count, 4, np.uint8))
+    ptex = far.ptex_of_face[:-1]
+    half = np.full(len(ptex), 0.5, np.float32)
+    before = near.evaluate(ptex, half, half)[0]
+    far.update(cage.positions + np.float32([0, 0, 1]))  # a pose set through one selection
+    after = near.evaluate(ptex, half, half)[0]
+    assert np.allclose(after, before + np.float32([0, 0, 1]), atol=1e-4)
