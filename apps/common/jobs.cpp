@@ -7,6 +7,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "limn/atlas/uv_metrics.hpp"
 #include "limn/paint/brush.hpp"
 #include "limn/simplify/distance.hpp"
 #include "limn/simplify/validate.hpp"
@@ -275,6 +276,66 @@ PaintOutcome paint(const Mesh& mesh, const StrokeScript& script, Rgba8 backgroun
       {"picks", picks},
       {"texture", reports::texture_json(tex)},
       {"timings_ms", {{"surface_bvh", t_surface}, {"texture", t_create}, {"paint", t_paint}}}};
+  return out;
+}
+
+void check(const UnwrapJob& o, Names names) {
+  const auto name = [names](std::string_view n) { return option_name(names, n); };
+  if (!(o.max_stretch >= 1 && o.max_stretch <= 100))
+    throw InputError(fmt::format("{} {}: must be 1-100", name("max-stretch"), o.max_stretch));
+  if (o.size < 16 || o.size > 16384)
+    throw InputError(fmt::format("{} {}: must be 16-16384 texels", name("size"), o.size));
+  if (o.tiles < 1 || o.tiles > 100)
+    throw InputError(fmt::format("{} {}: must be 1-100 (UDIM 1001-1100)", name("tiles"), o.tiles));
+  if (o.padding < 0 || 4 * o.padding >= o.size)
+    throw InputError(fmt::format("{} {}: must be 0 or more and under a quarter of {}",
+                                 name("padding"), o.padding, name("size")));
+  if (o.texels_per_unit && !(*o.texels_per_unit > 0 && std::isfinite(*o.texels_per_unit)))
+    throw InputError(fmt::format("{} {}: must be a positive number", name("texels-per-unit"),
+                                 *o.texels_per_unit));
+}
+
+UnwrapOutcome unwrap(const Mesh& mesh, const UnwrapJob& job, std::string_view name) {
+  UnwrapOptions uo;
+  uo.max_stretch = job.max_stretch;
+  uo.size = job.size;
+  uo.texels_per_unit = job.texels_per_unit.value_or(0.0);
+  uo.tiles = job.tiles;
+  uo.padding = job.padding;
+  UnwrapOutcome out{unwrap_mesh(mesh, uo, name), {}};
+  const UnwrapStats& st = out.result.stats;
+  Stopwatch laps;
+  // The layout checked by rasterising it again, independently of the packer.
+  const UvMetrics m = measure_uvs(out.result.mesh, job.size);
+  const double t_check = laps.lap();
+  if (m.flipped || m.overlapping_texels || m.straddling)
+    throw std::runtime_error(fmt::format(
+        "{}: the atlas failed its check ({} flipped triangles, {} overlapping texels, {} "
+        "triangles across tiles); nothing written",
+        name, m.flipped, m.overlapping_texels, m.straddling));
+  nlohmann::json udim = nlohmann::json::array();
+  for (size_t t = 0; t < st.tiles; ++t) udim.push_back(1001 + t);
+  out.report = {
+      {"charts", st.charts},
+      {"splits", st.splits},
+      {"tiles", st.tiles},
+      {"udim", udim},
+      {"size", st.size},
+      {"padding", job.padding},
+      {"texels_per_unit", st.texels_per_unit},
+      {"max_stretch", job.max_stretch},
+      {"utilization", st.utilization},
+      {"stretch_l2", st.stretch_l2},
+      {"stretch_linf", st.stretch_linf},
+      {"check",
+       {{"triangles", m.triangles},
+        {"flipped", m.flipped},
+        {"overlapping_texels", m.overlapping_texels},
+        {"coverage", m.coverage},
+        {"stretch_l2", m.stretch_l2},
+        {"stretch_linf", m.stretch_linf}}},
+      {"replaced_uvs", !mesh.uvs.empty()},
+      {"timings_ms", {{"charts", st.chart_ms}, {"pack", st.pack_ms}, {"check", t_check}}}};
   return out;
 }
 

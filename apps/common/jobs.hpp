@@ -8,6 +8,7 @@
 #include <string>
 #include <string_view>
 
+#include "limn/atlas/unwrap.hpp"
 #include "limn/mesh/mesh.hpp"
 #include "limn/paint/strokes.hpp"
 #include "limn/simplify/vsa.hpp"
@@ -79,5 +80,29 @@ struct PaintOutcome {
 void check_paint_depth(int depth, Names names);
 PaintOutcome paint(const Mesh& mesh, const StrokeScript& script, Rgba8 background,
                    std::optional<OctreeTexture> start);
+
+/// `limn unwrap`'s options (its defaults; names as its flags).
+struct UnwrapJob {
+  double max_stretch = UnwrapOptions{}.max_stretch;
+  int size = UnwrapOptions{}.size;
+  std::optional<double> texels_per_unit;  ///< none: the densest that fits
+  int tiles = 1;
+  int padding = UnwrapOptions{}.padding;
+};
+
+/// Throws InputError naming the first bad option.
+void check(const UnwrapJob& job, Names names);
+
+struct UnwrapOutcome {
+  UnwrapResult result;
+  /// charts, splits, tiles (UDIM numbers), size, texels_per_unit, utilization, stretch, the
+  /// independent check of the layout (measure_uvs: flipped, overlapping texels, coverage), whether
+  /// the input's UVs were replaced, timings_ms
+  nlohmann::json report;
+};
+
+/// Unwraps `mesh` (named `name` in errors) and checks the layout; std::runtime_error when the
+/// check finds a flipped triangle or overlapping charts (nothing must be written).
+UnwrapOutcome unwrap(const Mesh& mesh, const UnwrapJob& job, std::string_view name);
 
 }  // namespace limn::jobs

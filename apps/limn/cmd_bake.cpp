@@ -29,12 +29,7 @@ void run(const BakeOpts& o, CLI::App* cmd) {
   if (!png && format_from_path(out) == MeshFormat::automatic)
     throw InputError(fmt::format(
         "{}: cannot tell the output from the extension (.ply, .glb, .obj, .off or .png)", o.out));
-  {
-    const std::filesystem::path dir = std::filesystem::absolute(out).parent_path();
-    std::error_code ec;
-    if (!std::filesystem::is_directory(dir, ec))
-      throw InputError(fmt::format("{}: the output folder {} does not exist", o.out, dir.string()));
-  }
+  check_writable_folder(o.out, "output");
   int w = o.size, h = o.size;
   if (!o.resolution.empty()) {
     if (cmd->count("--size")) throw InputError("--size and --resolution exclude each other");

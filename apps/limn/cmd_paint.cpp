@@ -34,13 +34,6 @@ Rgba8 parse_color(const std::string& s, const char* option) {
   return rgba8_from_float(v.data());
 }
 
-void check_folder(const std::string& path) {
-  const std::filesystem::path dir = std::filesystem::absolute(path).parent_path();
-  std::error_code ec;
-  if (!std::filesystem::is_directory(dir, ec))
-    throw InputError(fmt::format("{}: the output folder {} does not exist", path, dir.string()));
-}
-
 void run_stats(const PaintOpts& o) {
   Stopwatch sw;
   const OctreeTexture t = load_lot(o.stats);
@@ -65,7 +58,7 @@ void run_paint(const PaintOpts& o) {
   const std::filesystem::path out(o.out);
   if (out.extension() != ".lot")
     throw InputError(fmt::format("{}: the texture file name must end in .lot", o.out));
-  check_folder(o.out);
+  check_writable_folder(o.out, "output");
   const Rgba8 background = parse_color(o.background, "--background");
   Stopwatch sw;
   nlohmann::json repaired;

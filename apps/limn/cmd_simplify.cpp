@@ -21,14 +21,6 @@ struct SimplifyOpts {
   RepairFlags repair;
 };
 
-// The folder a file will be written into must exist before minutes of work are spent.
-void check_writable_folder(const std::string& path, const char* what) {
-  const std::filesystem::path dir = std::filesystem::absolute(path).parent_path();
-  std::error_code ec;
-  if (!std::filesystem::is_directory(dir, ec))
-    throw InputError(fmt::format("{}: {} folder {} does not exist", path, what, dir.string()));
-}
-
 void run(const SimplifyOpts& o) {
   if (format_from_path(o.out) == MeshFormat::automatic)
     throw InputError(fmt::format(

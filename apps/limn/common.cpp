@@ -4,6 +4,7 @@
 #include <fmt/ranges.h>
 
 #include <algorithm>
+#include <filesystem>
 
 #include <sstream>
 
@@ -183,6 +184,13 @@ std::vector<float> parse_numbers(const std::string& s, const char* option) {
     }
   }
   return v;
+}
+
+void check_writable_folder(const std::string& path, const char* what) {
+  const std::filesystem::path dir = std::filesystem::absolute(path).parent_path();
+  std::error_code ec;
+  if (!std::filesystem::is_directory(dir, ec))
+    throw InputError(fmt::format("{}: the {} folder {} does not exist", path, what, dir.string()));
 }
 
 }  // namespace limn::cli

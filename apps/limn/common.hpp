@@ -28,6 +28,7 @@ void add_paint(CLI::App& app);
 void add_bake(CLI::App& app);
 void add_render(CLI::App& app);
 void add_repair(CLI::App& app);
+void add_unwrap(CLI::App& app);
 
 /// Reads a command's input mesh: `format` from the option named `format_option` (empty: by
 /// extension, then content), `weld` from --weld (glTF: seams merged back into one cage vertex
@@ -76,6 +77,10 @@ std::vector<float> parse_numbers(const std::string& s, const char* option);
 /// (dropped_attributes). When it is not empty, one warning line on stderr names them.
 nlohmann::json write_output(const Mesh& mesh, const std::string& path,
                             std::vector<std::string> lost = {}, const WriteOptions& opt = {});
+
+/// InputError "PATH: WHAT folder DIR does not exist" unless the folder `path` goes into exists:
+/// checked before minutes of work are spent.
+void check_writable_folder(const std::string& path, const char* what);
 
 /// Human-readable multi-line summary of the stats.
 std::string stats_text(const MeshStats& s);

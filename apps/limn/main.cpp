@@ -72,6 +72,7 @@ int main(int argc, char** argv) {
   limn::cli::add_bake(app);
   limn::cli::add_render(app);
   limn::cli::add_repair(app);
+  limn::cli::add_unwrap(app);
   limn::cli::add_demo(app);
   try {
     app.parse(argc, argv);

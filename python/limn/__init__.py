@@ -41,6 +41,7 @@ __all__ = [
     "StencilTable",
     "SubdivideResult",
     "Texture",
+    "UnwrapResult",
     "__version__",
     "bake",
     "info",
@@ -58,6 +59,7 @@ __all__ = [
     "simplify",
     "stencils",
     "subdivide",
+    "unwrap",
     "write_mesh",
     "write_png",
 ]
@@ -141,6 +143,36 @@ def simplify(mesh: Mesh, *, proxies: Optional[int] = None, target_error: Optiona
         mesh, proxies, target_error, max_proxies, method, seeding, seed, no_fill, iterations,
         teleports, split_threshold, polygons, distance)
     return SimplifyResult(out, labels, face_cluster, vertex_source, stats)
+
+
+@dataclasses.dataclass
+class UnwrapResult:
+    """What :func:`unwrap` made.
+
+    mesh: the input with new UVs (``uvs``/``uv_indices``; v up, tile (u // 1, v // 1)).
+    face_chart: (faces,) uint32, the chart of every face. chart_tile: (charts,) uint32, the tile of
+    every chart (UDIM 1001 + index). stats: ``limn unwrap --json``'s report (charts, tiles,
+    density, utilization, stretch, the independent check of the layout, timings).
+    """
+    mesh: Mesh
+    face_chart: np.ndarray
+    chart_tile: np.ndarray
+    stats: dict[str, Any]
+
+
+def unwrap(mesh: Mesh, *, max_stretch: float = 1.005, size: int = 1024,
+           texels_per_unit: Optional[float] = None, tiles: int = 1,
+           padding: int = 2) -> UnwrapResult:
+    """``limn unwrap``: an automatic UV atlas. Charts are cut (VSA along the sharpest feature)
+    until each one's conformal map has no flip and a Sander L2 stretch <= max_stretch, then
+    packed with ``padding`` free texels around each into one ``size`` x ``size`` atlas, or into at
+    most ``tiles`` UDIM tiles. texels_per_unit: the density (charts longer than a tile are cut);
+    default: the densest that fits. The input must be an edge-manifold, oriented mesh (see
+    :func:`repair`); any UVs it has are replaced.
+    """
+    out, face_chart, chart_tile, stats = _limn._unwrap(mesh, float(max_stretch), int(size),
+                                                       texels_per_unit, int(tiles), int(padding))
+    return UnwrapResult(out, face_chart, chart_tile, stats)
 
 
 @dataclasses.dataclass

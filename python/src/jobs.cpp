@@ -61,6 +61,30 @@ void bind_jobs(py::module_& m) {
       },
       py::arg("cage"), py::arg("level"), py::arg("limit"));
   m.def(
+      "_unwrap",
+      [](const Mesh& mesh, double max_stretch, int size, std::optional<double> texels_per_unit,
+         int tiles, int padding) {
+        jobs::UnwrapJob job;
+        job.max_stretch = max_stretch;
+        job.size = size;
+        job.texels_per_unit = texels_per_unit;
+        job.tiles = tiles;
+        job.padding = padding;
+        jobs::check(job, jobs::Names::python);
+        jobs::UnwrapOutcome out;
+        {
+          py::gil_scoped_release unlocked;
+          out = jobs::unwrap(mesh, job, "mesh");
+        }
+        UnwrapResult& r = out.result;
+        const auto faces = py::ssize_t(r.face_chart.size());
+        const auto charts = py::ssize_t(r.chart_tile.size());
+        return py::make_tuple(std::move(r.mesh), owned(std::move(r.face_chart), {faces}),
+                              owned(std::move(r.chart_tile), {charts}), to_python(out.report));
+      },
+      py::arg("mesh"), py::arg("max_stretch"), py::arg("size"), py::arg("texels_per_unit"),
+      py::arg("tiles"), py::arg("padding"));
+  m.def(
       "_repair",
       [](const Mesh& soup, double weld_tolerance) {
         RepairOptions o;

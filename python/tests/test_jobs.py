@@ -245,3 +245,42 @@ def test_selections_share_their_hierarchy_and_its_pose():
     far.update(cage.positions + np.float32([0, 0, 1]))  # a pose set through one selection
     after = near.evaluate(ptex, half, half)[0]
     assert np.allclose(after, before + np.float32([0, 0, 1]), atol=1e-4)
+
+
+@pytest.mark.parametrize("args", [dict(size=256), dict(size=64, tiles=12, texels_per_unit=24.0)])
+def test_unwrap_equals_the_cli(tmp_path, cli, args):
+    torus = limn.shape("torus")
+    limn.write_mesh(torus, tmp_path / "torus.obj")
+    flags = []
+    for key, value in args.items():
+        flags += ["--" + key.replace("_", "-"), value]
+    expected = cli("unwrap", tmp_path / "torus.obj", "-o", tmp_path / "cli.obj", *flags,
+                   json_out=True)
+    result = limn.unwrap(torus, **args)
+    assert without(result.stats, TIMING_KEYS) == without(expected, TIMING_KEYS | FILE_KEYS | {"faces"})
+    limn.write_mesh(result.mesh, tmp_path / "py.obj")
+    assert (tmp_path / "py.obj").read_bytes() == (tmp_path / "cli.obj").read_bytes()
+    # Charts and tiles as the UVs say: every face's UVs lie in its chart's tile.
+    assert result.face_chart.shape == (torus.face_count,)
+    assert result.chart_tile.shape == (result.stats["charts"],)
+    uv = result.mesh.uvs[result.mesh.uv_indices]
+    tile = result.chart_tile[np.repeat(result.face_chart, np.diff(result.mesh.face_offsets))]
+    assert np.all(uv[:, 0] >= tile % 10) and np.all(uv[:, 0] <= tile % 10 + 1)
+    assert np.all(uv[:, 1] >= tile // 10) and np.all(uv[:, 1] <= tile // 10 + 1)
+    assert result.stats["check"]["flipped"] == 0
+    assert result.stats["check"]["overlapping_texels"] == 0
+
+
+def test_unwrap_bad_options_and_meshes():
+    torus = limn.shape("torus")
+    with pytest.raises(limn.InputError, match="max_stretch 0.5"):
+        limn.unwrap(torus, max_stretch=0.5)
+    with pytest.raises(limn.InputError, match="texels_per_unit"):
+        limn.unwrap(torus, texels_per_unit=-2)
+    with pytest.raises(limn.InputError, match="too dense"):
+        limn.unwrap(torus, size=64, texels_per_unit=1000)
+    fin = limn.Mesh.from_arrays(
+        np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1]], np.float32),
+        np.array([[0, 1, 2], [1, 0, 3], [0, 1, 4]], np.uint32))
+    with pytest.raises(limn.RepairableError):
+        limn.unwrap(fin)
