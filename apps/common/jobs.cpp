@@ -325,6 +325,7 @@ UnwrapOutcome unwrap(const Mesh& mesh, const UnwrapJob& job, std::string_view na
       {"texels_per_unit", st.texels_per_unit},
       {"max_stretch", job.max_stretch},
       {"utilization", st.utilization},
+      {"coverage", st.coverage},
       {"stretch_l2", st.stretch_l2},
       {"stretch_linf", st.stretch_linf},
       {"check",

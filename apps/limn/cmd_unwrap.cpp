@@ -74,7 +74,7 @@ void add_unwrap(CLI::App& app) {
                   "UDIM tiles to use at most (1: one atlas in [0,1]; more: tiles 1001, 1002, ...)");
   cmd->add_option("--padding", o->job.padding, "Free texels around every chart (2)");
   cmd->add_option("--max-stretch", o->job.max_stretch,
-                  "Largest Sander L2 stretch a chart keeps before it is cut (1.005)");
+                  "Largest Sander L2 stretch a chart keeps before it is cut (1.003)");
   add_weld_flag(*cmd, o->weld);
   add_repair_flags(*cmd, o->repair);
   cmd->add_option("--format", o->format, "Input format, overriding the extension");

@@ -160,7 +160,7 @@ class UnwrapResult:
     stats: dict[str, Any]
 
 
-def unwrap(mesh: Mesh, *, max_stretch: float = 1.005, size: int = 1024,
+def unwrap(mesh: Mesh, *, max_stretch: float = 1.003, size: int = 1024,
            texels_per_unit: Optional[float] = None, tiles: int = 1,
            padding: int = 2) -> UnwrapResult:
     """``limn unwrap``: an automatic UV atlas. Charts are cut (VSA along the sharpest feature)

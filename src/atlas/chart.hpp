@@ -22,6 +22,7 @@ struct Chart {
   long euler = 0;                       ///< V - E + F; 1 for a disk
   double area = 0, normal_sum = 0;      ///< sum of face areas, |sum of vector areas|
   std::vector<double> uv;               ///< 2 per chart vertex once mapped
+  double fill = 0;  ///< once mapped and oriented: UV area over the area of the UVs' convex hull
 };
 
 /// Shared scratch arrays for building charts from disjoint face sets on several threads at once:

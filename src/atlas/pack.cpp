@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <climits>
 #include <cmath>
+#include <numbers>
 #include <numeric>
 
 namespace limn::atlas {
@@ -32,6 +33,11 @@ ChartExtent orient_chart(Chart& ch) {
     hull[k++] = order[i];
   }
   hull.resize(k > 1 ? k - 1 : k);
+  double hull_area = 0;
+  for (size_t i = 0; i < hull.size(); ++i) {
+    const uint32_t a = hull[i], b = hull[(i + 1) % hull.size()];
+    hull_area += 0.5 * (x(a) * y(b) - x(b) * y(a));
+  }
 
   // The smallest bounding rectangle has a side along a hull edge.
   double best_area = INFINITY, best_c = 1, best_s = 0;
@@ -57,7 +63,7 @@ ChartExtent orient_chart(Chart& ch) {
     lo[0] = std::min(lo[0], p), hi[0] = std::max(hi[0], p);
     lo[1] = std::min(lo[1], q), hi[1] = std::max(hi[1], q);
   }
-  ChartExtent e{hi[0] - lo[0], hi[1] - lo[1]};
+  ChartExtent e{hi[0] - lo[0], hi[1] - lo[1], hull_area};
   const bool turn = e.height > e.width;
   for (size_t i = 0; i < n; ++i) {
     const double p = ch.uv[2 * i] - lo[0], q = ch.uv[2 * i + 1] - lo[1];
@@ -78,6 +84,7 @@ struct Raster {
   std::vector<uint32_t> row_runs{0};      ///< row y's runs are runs[row_runs[y] .. row_runs[y+1])
   std::vector<std::pair<int, int>> runs;  ///< (first column, length)
   size_t covered = 0;                     ///< texels the triangles touch, before padding
+  size_t taken = 0;                       ///< texels of the runs (padding included)
 };
 
 // Marks every texel of the w x h grid that the triangle touches (closed texel squares).
@@ -105,21 +112,19 @@ void cover_triangle(const double px[3], const double py[3], int w, int h,
   }
 }
 
-Raster rasterise(const Chart& ch, const ChartExtent& e, int turns, double density, int pad) {
+Raster rasterise(const Chart& ch, const Pose& pose, double density, int pad) {
   Raster r;
-  const bool side = turns % 2 == 1;
-  const double cw = (side ? e.height : e.width) * density,
-               chh = (side ? e.width : e.height) * density;
+  const double cw = pose.width * density, chh = pose.height * density;
   r.w = int(std::ceil(cw)) + 2 * pad + 1;
   r.h = int(std::ceil(chh)) + 2 * pad + 1;
   std::vector<uint8_t> grid(size_t(r.w) * r.h, 0);
-  const Placement at{0, turns, 0, 0};
+  const Placement at{};
   for (size_t t = 0; t < ch.triangles.size(); t += 3) {
     double px[3], py[3];
     for (int i = 0; i < 3; ++i) {
       const uint32_t v = ch.triangles[t + i];
       double texel[2];
-      placed_texel(ch.uv[2 * size_t(v)], ch.uv[2 * size_t(v) + 1], e, at, density, pad, texel);
+      placed_texel(ch.uv[2 * size_t(v)], ch.uv[2 * size_t(v) + 1], pose, at, density, pad, texel);
       px[i] = texel[0], py[i] = texel[1];
     }
     cover_triangle(px, py, r.w, r.h, grid);
@@ -150,6 +155,7 @@ Raster rasterise(const Chart& ch, const ChartExtent& e, int turns, double densit
       const int x0 = x;
       while (x < r.w && row[x]) ++x;
       r.runs.emplace_back(x0, x - x0);
+      r.taken += size_t(x - x0);
     }
     r.row_runs.push_back(uint32_t(r.runs.size()));
   }
@@ -162,7 +168,7 @@ class Tile {
  public:
   explicit Tile(int size) : size_(size), run_(size_t(size) * size), longest_(size, size) {
     for (int y = 0; y < size; ++y)
-      for (int x = 0; x < size; ++x) run_[size_t(y) * size + x] = size - x;
+      for (int x = 0; x < size; ++x) run_[size_t(y) * size + x] = int16_t(size - x);
   }
   // The lowest row under `y_end` (then the leftmost column) where the chart fits; false when
   // it fits nowhere below.
@@ -181,11 +187,15 @@ class Tile {
         int skip = 0;
         for (int k = 0; k < r.h && !skip; ++k) {
           const int row = k == 0 ? blocking_row : (k <= blocking_row ? k - 1 : k);
+          const int16_t* line = &run_[size_t(y + row) * size_ + x];
           for (uint32_t i = r.row_runs[row]; i < r.row_runs[row + 1] && !skip; ++i) {
             const auto [first, length] = r.runs[i];
-            const int free = run_[size_t(y + row) * size_ + x + first];
-            // Every start up to x + free puts this run over the taken texel ending the free run.
-            if (free < length) skip = free + 1, blocking_row = row;
+            const int here = line[first];
+            if (here >= length) continue;
+            // Every start that puts this run over the taken texels ahead fails: jump past them.
+            const int free = std::max(here, 0);
+            const int taken = x + first + free < size_ ? -line[first + free] : 1;
+            skip = free + taken, blocking_row = row;
           }
         }
         if (!skip) {
@@ -199,52 +209,51 @@ class Tile {
   }
   void take(const Raster& r, int x0, int y0) {
     for (int row = 0; row < r.h; ++row) {
-      int* run = &run_[size_t(y0 + row) * size_];
+      int16_t* run = &run_[size_t(y0 + row) * size_];
       for (uint32_t i = r.row_runs[row]; i < r.row_runs[row + 1]; ++i) {
         const auto [first, length] = r.runs[i];
-        std::fill(run + x0 + first, run + x0 + first + length, 0);
-        // Free runs to the left of it now end at it.
-        for (int x = x0 + first - 1; x >= 0 && run[x] != 0; --x) run[x] = run[x + 1] + 1;
+        const int a = x0 + first, b = a + length;
+        for (int x = b - 1; x >= a; --x)
+          run[x] = int16_t(x + 1 < size_ && run[x + 1] < 0 ? run[x + 1] - 1 : -1);
+        // The runs left of it now end at it (free ones) or go on through it (taken ones).
+        if (a > 0 && run[a - 1] < 0)
+          for (int x = a - 1; x >= 0 && run[x] < 0; --x) run[x] = int16_t(run[x + 1] - 1);
+        else
+          for (int x = a - 1; x >= 0 && run[x] > 0; --x)
+            run[x] = int16_t(run[x + 1] > 0 ? run[x + 1] + 1 : 1);
       }
-      longest_[y0 + row] = 0;
-      for (int x = 0; x < size_; x += std::max(1, run[x]))
-        longest_[y0 + row] = std::max(longest_[y0 + row], run[x]);
+      int longest = 0;
+      for (int x = 0; x < size_; x += std::abs(run[x])) longest = std::max(longest, int(run[x]));
+      longest_[y0 + row] = longest;
     }
   }
 
  private:
   int size_;
-  std::vector<int> run_;
+  /// Per texel: the free texels from it to the right (> 0), or minus the taken ones (< 0).
+  std::vector<int16_t> run_;
   std::vector<int> longest_;  ///< per row: its longest free run
 };
 
-// One packing at `density`; false when the charts do not fit in the tiles allowed.
-bool pack_at(const std::vector<Chart>& charts, const std::vector<ChartExtent>& extents,
-             double density, const PackOptions& o, Packing& out) {
-  const size_t n = charts.size();
-  std::vector<Raster> raster[4];
-  for (auto& r : raster) r.resize(n);
-  tbb::parallel_for(size_t(0), n, [&](size_t i) {
-    for (int turns = 0; turns < 4; ++turns)
-      raster[turns][i] = rasterise(charts[i], extents[i], turns, density, o.padding);
-  });
-  std::vector<uint32_t> order(n);
-  std::iota(order.begin(), order.end(), 0u);
-  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
-    const Raster &ra = raster[0][a], &rb = raster[0][b];
-    return ra.covered > rb.covered || (ra.covered == rb.covered && ra.h > rb.h);
-  });
-
+// Places the rasterised charts in `order`, each at the turn and lowest row (then leftmost
+// column) where it fits with its top lowest. Returns the position in `order` of the first chart
+// that fits in no tile allowed, or order.size() when all fit.
+size_t place_all(const std::vector<std::vector<Raster>>& raster,
+                 const std::vector<std::vector<Pose>>& poses, const std::vector<uint32_t>& order,
+                 const PackOptions& o, Packing& out) {
+  const size_t n = order.size();
   std::vector<Tile> tiles;
   out.placements.assign(n, {});
+  out.poses.assign(n, {});
   out.covered = 0;
-  for (uint32_t i : order) {
+  out.taken = 0;
+  for (size_t at = 0; at < n; ++at) {
+    const uint32_t i = order[at];
     bool placed = false;
     for (int t = 0; t < o.tiles && !placed; ++t) {
       if (size_t(t) == tiles.size()) tiles.emplace_back(o.size);
-      // Of the four turns, the one whose top ends lowest.
       int best_top = INT_MAX, best_x = 0, best_y = 0, best_turn = 0;
-      for (int turn = 0; turn < 4; ++turn) {
+      for (int turn = 0; turn < o.turns; ++turn) {
         int x = 0, y = 0;
         const Raster& r = raster[turn][i];
         const int y_end = best_top == INT_MAX ? INT_MAX : best_top - r.h;
@@ -255,51 +264,114 @@ bool pack_at(const std::vector<Chart>& charts, const std::vector<ChartExtent>& e
       const Raster& r = raster[best_turn][i];
       tiles[t].take(r, best_x, best_y);
       out.placements[i] = {uint32_t(t), best_turn, best_x, best_y};
+      out.poses[i] = poses[i][best_turn];
       out.covered += r.covered;
+      out.taken += r.taken;
       placed = true;
     }
-    if (!placed) return false;
+    if (!placed) return at;
   }
   out.tiles = tiles.size();
-  out.texels_per_unit = density;
-  return true;
+  return n;
+}
+
+// One packing at `density`; false when the charts do not fit in the tiles allowed. Greedy
+// placement depends much on the order, so three orders are tried (largest area, tallest, longest
+// outline first) and the first that fits is kept.
+bool pack_at(const std::vector<Chart>& charts, const std::vector<std::vector<Pose>>& poses,
+             double density, const PackOptions& o, Packing& out) {
+  const size_t n = charts.size();
+  auto raster = std::vector<std::vector<Raster>>(size_t(o.turns), std::vector<Raster>(n));
+  tbb::parallel_for(size_t(0), n, [&](size_t i) {
+    for (int t = 0; t < o.turns; ++t)
+      raster[t][i] = rasterise(charts[i], poses[i][t], density, o.padding);
+  });
+  std::vector<uint32_t> order(n);
+  for (int by = 0; by < 3; ++by) {
+    std::iota(order.begin(), order.end(), 0u);
+    std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+      const Raster &ra = raster[0][a], &rb = raster[0][b];
+      const size_t ka = by == 0 ? ra.covered : by == 1 ? size_t(ra.h) : size_t(ra.w + ra.h);
+      const size_t kb = by == 0 ? rb.covered : by == 1 ? size_t(rb.h) : size_t(rb.w + rb.h);
+      return ka > kb;
+    });
+    if (place_all(raster, poses, order, o, out) == n) {
+      out.texels_per_unit = density;
+      return true;
+    }
+  }
+  return false;
 }
 
 }  // namespace
 
-Packing pack_charts(const std::vector<Chart>& charts, const std::vector<ChartExtent>& extents,
-                    const PackOptions& o) {
+Pose chart_pose(const Chart& ch, int turn, int turns) {
+  const double angle = 2 * std::numbers::pi * turn / turns;
+  Pose p;
+  p.c = std::cos(angle), p.s = std::sin(angle);
+  double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+  for (size_t v = 0; v < ch.uv.size(); v += 2) {
+    const double x = p.c * ch.uv[v] - p.s * ch.uv[v + 1], y = p.s * ch.uv[v] + p.c * ch.uv[v + 1];
+    lo[0] = std::min(lo[0], x), hi[0] = std::max(hi[0], x);
+    lo[1] = std::min(lo[1], y), hi[1] = std::max(hi[1], y);
+  }
+  p.ox = -lo[0], p.oy = -lo[1], p.width = hi[0] - lo[0], p.height = hi[1] - lo[1];
+  return p;
+}
+
+Packing pack_charts(const std::vector<Chart>& charts, const PackOptions& o) {
+  std::vector<std::vector<Pose>> poses(charts.size());
+  tbb::parallel_for(size_t(0), charts.size(), [&](size_t i) {
+    for (int t = 0; t < o.turns; ++t) poses[i].push_back(chart_pose(charts[i], t, o.turns));
+  });
   Packing best;
   if (o.texels_per_unit > 0) {
-    best.fits = pack_at(charts, extents, o.texels_per_unit, o, best);
+    best.fits = pack_at(charts, poses, o.texels_per_unit, o, best);
     return best;
   }
   double area = 0;
   for (const Chart& ch : charts) area += ch.area;
   if (!(area > 0)) return best;
-  // Densities from the one at which the charts would cover every texel of every tile, down
-  // in steps of 3% until the charts fit, then halving the last step a few times. Greedy packing
-  // is not monotonic in the density (a denser try can succeed where a sparser one failed), so a
-  // plain bisection would stop early.
-  const double ceiling = o.size * std::sqrt(o.tiles / area);
-  double lo = ceiling;
-  best.fits = pack_at(charts, extents, lo, o, best);
+  // Densities in steps of 3% from a first guess (charts and padding filling 3/4 of the tiles),
+  // up while the charts fit or down until they do, then the last step halved a few times. Greedy
+  // packing is not monotonic in the density (a denser try can succeed where a sparser one
+  // failed), so a plain bisection would stop early.
+  const double ceiling = o.size * std::sqrt(o.tiles / area);  // charts covering every texel
+  double lo = ceiling * std::sqrt(0.75);
+  best.fits = pack_at(charts, poses, lo, o, best);
+  if (best.fits) {
+    Packing denser;
+    while (lo / 0.97 <= ceiling && pack_at(charts, poses, lo / 0.97, o, denser)) {
+      lo /= 0.97;
+      std::swap(best, denser);
+    }
+    best.fits = true;
+  }
   while (!best.fits) {
     lo *= 0.97;
     if (lo < ceiling * 1e-6) return best;  // too many charts for the tiles at any density
-    best.fits = pack_at(charts, extents, lo, o, best);
+    best.fits = pack_at(charts, poses, lo, o, best);
   }
   Packing trial;
+  const double first_fit = lo;
   double hi = std::min(ceiling, lo / 0.97);
   for (int step = 0; step < 4; ++step) {
     const double mid = std::sqrt(lo * hi);
-    if (pack_at(charts, extents, mid, o, trial)) {
+    if (pack_at(charts, poses, mid, o, trial)) {
       lo = mid;
       std::swap(best, trial);
       best.fits = true;
     } else {
       hi = mid;
     }
+  }
+  // Greedy packing is chaotic in the density: a few denser tries past the first failure, in 1%
+  // steps, often find one that fits; the densest that does is kept.
+  for (int step = 1; step <= 8; ++step) {
+    const double d = first_fit * (1 + 0.01 * step);
+    if (d > ceiling) break;
+    if (d <= best.texels_per_unit) continue;
+    if (pack_at(charts, poses, d, o, trial)) std::swap(best, trial), best.fits = true;
   }
   return best;
 }

@@ -15,6 +15,12 @@ namespace limn {
 
 namespace {
 
+// Least UV area over the area of its convex hull a chart may have: a chart with long arms or
+// deep bays is cut, as it would leave packing space no other chart can use. Merges must keep a
+// little more, since a merge saves only one seam.
+constexpr double kMinFill = 0.55;
+constexpr double kMinMergedFill = 0.6;
+
 double ms_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -62,8 +68,10 @@ struct Charter {
     if (ch.euler != 1 || ch.normal_sum < 0.5 * ch.area || !atlas::conformal_map(s, ch))
       return false;
     const atlas::ChartQuality q = atlas::chart_quality(s, ch);
-    return q.flipped == 0 && q.stretch_l2 <= max_stretch && !atlas::boundary_crosses(ch) &&
-           atlas::orient_chart(ch).width <= max_extent;
+    if (q.flipped != 0 || q.stretch_l2 > max_stretch || atlas::boundary_crosses(ch)) return false;
+    const atlas::ChartExtent e = atlas::orient_chart(ch);
+    ch.fill = e.hull_area > 0 ? ch.area / e.hull_area : 1;
+    return ch.fill >= kMinFill && e.width <= max_extent;
   }
 
   // Charts over the face sets, each cut in two (along its sharpest feature) until its map is
@@ -165,8 +173,8 @@ std::vector<std::vector<uint32_t>> label_pieces(const VsaSurface& s,
   return out;
 }
 
-// Merges neighbouring charts while the merged map stays good, the pairs sharing the longest
-// borders first.
+// Merges neighbouring charts while the merged map stays good and compact, the pairs sharing the
+// longest borders first.
 void merge_charts(Charter& charter, std::vector<atlas::Chart>& charts) {
   const VsaSurface& s = charter.s;
   for (int pass = 0; pass < 4; ++pass) {
@@ -199,6 +207,9 @@ void merge_charts(Charter& charter, std::vector<atlas::Chart>& charts) {
       faces.insert(faces.end(), charts[b].faces.begin(), charts[b].faces.end());
       atlas::Chart merged;
       if (!charter.try_chart(std::move(faces), charter.next_id++, merged)) continue;
+      // A merge that leaves the chart much less convex than its hull costs more packing space
+      // than the seam it saves.
+      if (merged.fill < kMinMergedFill) continue;
       charts[a] = std::move(merged);
       charts[b].faces.clear();
       touched[a] = touched[b] = 1;
@@ -265,11 +276,9 @@ UnwrapResult unwrap_mesh(const Mesh& mesh, const UnwrapOptions& o, std::string_v
   st.chart_ms = ms_since(t0);
 
   const auto t1 = std::chrono::steady_clock::now();
-  std::vector<atlas::ChartExtent> extents(charts.size());
-  tbb::parallel_for(size_t(0), charts.size(),
-                    [&](size_t i) { extents[i] = atlas::orient_chart(charts[i]); });
+  tbb::parallel_for(size_t(0), charts.size(), [&](size_t i) { atlas::orient_chart(charts[i]); });
   const atlas::PackOptions po{o.size, o.tiles, o.padding, o.texels_per_unit};
-  const atlas::Packing pack = atlas::pack_charts(charts, extents, po);
+  const atlas::Packing pack = atlas::pack_charts(charts, po);
   if (!pack.fits) {
     if (o.texels_per_unit > 0)
       throw InputError(fmt::format(
@@ -284,7 +293,9 @@ UnwrapResult unwrap_mesh(const Mesh& mesh, const UnwrapOptions& o, std::string_v
   st.tiles = pack.tiles;
   st.size = o.size;
   st.texels_per_unit = pack.texels_per_unit;
-  st.utilization = double(pack.covered) / (double(pack.tiles) * o.size * o.size);
+  const double texels = double(pack.tiles) * o.size * o.size;
+  st.utilization = double(pack.taken) / texels;
+  st.coverage = double(pack.covered) / texels;
 
   // The mesh with one UV per chart vertex, in tile units (u tile = index % 10, v tile = index /
   // 10).
@@ -302,7 +313,7 @@ UnwrapResult unwrap_mesh(const Mesh& mesh, const UnwrapOptions& o, std::string_v
     const double tu = p.tile % 10, tv = p.tile / 10;
     for (size_t v = 0; v < ch.vertex_source.size(); ++v) {
       double texel[2];
-      atlas::placed_texel(ch.uv[2 * v], ch.uv[2 * v + 1], extents[k], p, pack.texels_per_unit,
+      atlas::placed_texel(ch.uv[2 * v], ch.uv[2 * v + 1], pack.poses[k], p, pack.texels_per_unit,
                           o.padding, texel);
       out.uvs.push_back(float(tu + texel[0] / o.size));
       out.uvs.push_back(float(tv + texel[1] / o.size));

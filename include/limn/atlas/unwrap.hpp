@@ -2,10 +2,11 @@
 //
 // Charts come from variational shape approximation split top-down: a chart is kept when it is a
 // topological disk whose conformal map (LSCM, Levy et al. 2002) has no flipped triangle, a simple
-// boundary and a Sander L2 stretch at most `max_stretch`; otherwise VSA cuts it in two along its
-// sharpest feature and both halves are tried again. Charts are scaled to their surface area,
-// turned to their smallest bounding rectangle and packed by their rasterised outlines (with a
-// gutter) into one atlas or into UDIM tiles.
+// boundary, a Sander L2 stretch at most `max_stretch` and a compact shape (over half of its
+// convex hull); otherwise VSA cuts it in two along its sharpest feature and both halves are tried
+// again. Then chart borders are smoothed and neighbours merged while the merged chart still
+// passes. Charts are scaled to their surface area, turned to their smallest bounding rectangle
+// and packed by their rasterised outlines (with a gutter) into one atlas or into UDIM tiles.
 #pragma once
 
 #include <cstddef>
@@ -20,7 +21,7 @@ namespace limn {
 struct UnwrapOptions {
   /// Largest Sander L2 stretch a chart may keep (1 = isometric up to scale); charts above it are
   /// cut. Lower gives less distortion and more charts.
-  double max_stretch = 1.005;
+  double max_stretch = 1.003;
   /// Side of the square atlas or of each UDIM tile, in texels.
   int size = 1024;
   /// Texels per model unit; 0 = the largest density whose charts fit in `tiles` tiles of `size`.
@@ -39,9 +40,12 @@ struct UnwrapStats {
   size_t tiles = 0;            ///< tiles used (1 for a single atlas)
   int size = 0;                ///< texels per tile side
   double texels_per_unit = 0;  ///< the density used
-  /// Texels any chart touches (conservative cover) over all texels of the used tiles; the figure
-  /// xatlas reports as utilisation.
+  /// Texels the charts and their padding take over all texels of the tiles used: how well the
+  /// packing fills them, as xatlas computes its utilisation (set texels of its padded chart
+  /// images over the atlas).
   double utilization = 0;
+  /// Texels any chart's triangles touch (no padding) over all texels of the tiles used.
+  double coverage = 0;
   double stretch_l2 = 0;    ///< Sander's L2 over the mesh (1 is optimal)
   double stretch_linf = 0;  ///< Sander's Linf (largest singular value, normalised)
   double chart_ms = 0, pack_ms = 0;
