@@ -1,12 +1,16 @@
-// limn bake: an octree texture into per-vertex colours (PLY, GLB, OBJ, OFF) or into the mesh's
-// UV layout as a PNG with a dilated gutter.
+// limn bake: an octree texture into per-vertex colours (PLY, OBJ, OFF, or GLB without UVs), or
+// into a UV layout (the mesh's own, or a new atlas with --atlas): PNG images (one per UDIM tile)
+// with a dilated gutter, or a GLB whose material carries the baked texture.
 #include <fmt/format.h>
 
 #include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <utility>
 
+#include "../common/jobs.hpp"
 #include "common.hpp"
+#include "limn/mesh/file.hpp"
 #include "limn/paint/bake.hpp"
 #include "limn/paint/file.hpp"
 
@@ -15,21 +19,52 @@ namespace limn::cli {
 namespace {
 
 struct BakeOpts {
-  std::string texture, mesh, out, format, resolution;
+  std::string texture, mesh, out, format, resolution, mesh_out;
   int size = 1024, gutter = 8;
-  bool nearest = false, json = false, weld = false;
+  bool nearest = false, json = false, weld = false, atlas = false;
+  jobs::UnwrapJob unwrap;
   RepairFlags repair;
 };
 
+std::string lower_extension(const std::filesystem::path& p) {
+  std::string ext = p.extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+// The file of UDIM tile `tile` (UDIM number 1001 + tile): OUT's "<UDIM>" replaced by the number,
+// or the number put before the extension ("paint.png" -> "paint.1001.png").
+std::filesystem::path tile_path(const std::string& out, int tile) {
+  const std::string number = std::to_string(1001 + tile);
+  for (const char* token : {"<UDIM>", "<udim>"})
+    if (const size_t at = out.find(token); at != std::string::npos)
+      return out.substr(0, at) + number + out.substr(at + 6);
+  std::filesystem::path p(out);
+  return p.replace_extension("." + number + p.extension().string());
+}
+
 void run(const BakeOpts& o, CLI::App* cmd) {
   const std::filesystem::path out(o.out);
-  std::string ext = out.extension().string();
-  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-  const bool png = ext == ".png";
+  const std::string ext = lower_extension(out);
+  const bool png = ext == ".png", glb = ext == ".glb";
   if (!png && format_from_path(out) == MeshFormat::automatic)
     throw InputError(fmt::format(
-        "{}: cannot tell the output from the extension (.ply, .glb, .obj, .off or .png)", o.out));
+        "{}: cannot tell the output from the extension (.png, .glb, .ply, .obj or .off)", o.out));
+  for (const char* flag : {"--tiles", "--texels-per-unit", "--padding", "--max-stretch"})
+    if (cmd->count(flag) && !o.atlas) throw InputError(fmt::format("{} needs --atlas", flag));
+  if (o.atlas) {
+    if (!png && !glb)
+      throw InputError("--atlas bakes into a texture: the output must be .png or .glb");
+    if (!o.resolution.empty())
+      throw InputError("--atlas makes square tiles: use --size, not --resolution");
+    if (png && o.mesh_out.empty())
+      throw InputError(
+          "--atlas with a PNG output needs --mesh-out FILE for the mesh with its new UVs");
+  }
+  if (!o.mesh_out.empty() && !(png || glb))
+    throw InputError("--mesh-out goes with a texture output (.png or .glb)");
   check_writable_folder(o.out, "output");
+  if (!o.mesh_out.empty()) check_writable_folder(o.mesh_out, "--mesh-out");
   int w = o.size, h = o.size;
   if (!o.resolution.empty()) {
     if (cmd->count("--size")) throw InputError("--size and --resolution exclude each other");
@@ -45,9 +80,12 @@ void run(const BakeOpts& o, CLI::App* cmd) {
           fmt::format("--resolution {}: expected WxH, such as 2048x1024", o.resolution));
     }
   }
-  if (png && (w < 1 || h < 1 || w > 16384 || h > 16384))
+  if ((png || glb) && (w < 1 || h < 1 || w > 16384 || h > 16384))
     throw InputError(fmt::format("image size {}x{}: each side must be 1-16384", w, h));
   if (o.gutter < 0 || o.gutter > 1024) throw InputError("--gutter: must be 0-1024 pixels");
+  jobs::UnwrapJob unwrap = o.unwrap;
+  unwrap.size = o.size;
+  if (o.atlas) jobs::check(unwrap, jobs::Names::cli);
 
   Stopwatch sw;
   const OctreeTexture tex = load_lot(o.texture);
@@ -62,26 +100,18 @@ void run(const BakeOpts& o, CLI::App* cmd) {
                       {"repair", repaired},
                       {"output", o.out},
                       {"filter", o.nearest ? "nearest" : "trilinear"}};
-  if (png) {
-    if (mesh.uvs.empty())
-      throw InputError(fmt::format(
-          "{}: the mesh has no texture coordinates; bake to .ply or .glb for vertex colours",
-          o.mesh));
-    const Image img = bake_uv_texture(tex, mesh, w, h, o.gutter, bo);
-    const double t_bake = sw.lap();
-    write_file_atomic(out, encode_png(img));
-    size_t covered = 0;
-    for (size_t i = 3; i < img.rgba.size(); i += 4) covered += img.rgba[i] != 0;
-    j["mode"] = "uv";
-    j["image"] = {{"width", w}, {"height", h}, {"gutter", o.gutter}, {"opaque_texels", covered}};
-    j["timings_ms"] = {{"read_texture", t_tex},
-                       {"read_mesh", t_mesh},
-                       {"bake", t_bake},
-                       {"write", sw.lap()},
-                       {"total", sw.ms()}};
-  } else {
+  nlohmann::json timings = {{"read_texture", t_tex}, {"read_mesh", t_mesh}};
+
+  const bool textured = png || (glb && (o.atlas || !mesh.uvs.empty()));
+  if (textured && !o.atlas && mesh.uvs.empty())
+    throw InputError(fmt::format(
+        "{}: the mesh has no texture coordinates: add --atlas to make them, or bake to .ply for "
+        "vertex colours",
+        o.mesh));
+  check_texture_fits(tex, mesh, o.texture, o.mesh);
+  if (!textured) {
     mesh.colors = bake_vertex_colors(tex, mesh, bo);
-    const double t_bake = sw.lap();
+    timings["bake"] = sw.lap();
     write_mesh(mesh, out);
     float bg[4];
     rgba8_to_float(tex.background(), bg);
@@ -95,17 +125,79 @@ void run(const BakeOpts& o, CLI::App* cmd) {
     j["mode"] = "vertex";
     j["vertices"] = mesh.vertex_count();
     j["painted_vertices"] = painted;
-    j["timings_ms"] = {{"read_texture", t_tex},
-                       {"read_mesh", t_mesh},
-                       {"bake", t_bake},
-                       {"write", sw.lap()},
-                       {"total", sw.ms()}};
+  } else {
+    if (o.atlas) {
+      jobs::UnwrapOutcome u = jobs::unwrap(mesh, unwrap, o.mesh);
+      mesh = std::move(u.result.mesh);
+      j["atlas"] = std::move(u.report);
+      timings["unwrap"] = sw.lap();
+    }
+    size_t outside = 0;
+    const std::vector<int> tiles = uv_tiles(mesh, &outside);
+    if (tiles.empty())
+      throw InputError(
+          fmt::format("{}: no UV triangle lies in a UDIM tile (u, v in [0, 10))", o.mesh));
+    if (outside)
+      fmt::print(stderr, "limn: warning: {}: {} triangles have UVs outside [0, 10): not baked\n",
+                 o.mesh, outside);
+    j["triangles_outside_tiles"] = outside;
+    if (glb && tiles != std::vector<int>{0})
+      throw InputError(fmt::format(
+          "{}: the UVs use UDIM tiles beyond 1001, which glTF cannot hold: bake to .png", o.mesh));
+    // Everything is baked and encoded first, then written all at once (or not at all).
+    std::vector<std::pair<std::filesystem::path, std::string>> files;
+    nlohmann::json images = nlohmann::json::array();
+    for (int tile : tiles) {
+      bo.tile = tile;
+      const Image img = bake_uv_texture(tex, mesh, w, h, o.gutter, bo);
+      size_t opaque = 0;
+      for (size_t i = 3; i < img.rgba.size(); i += 4) opaque += img.rgba[i] != 0;
+      const std::filesystem::path path = glb                            ? out
+                                         : tiles == std::vector<int>{0} ? out
+                                                                        : tile_path(o.out, tile);
+      images.push_back({{"udim", 1001 + tile},
+                        {"file", glb ? nlohmann::json(nullptr) : nlohmann::json(path.string())},
+                        {"opaque_texels", opaque}});
+      files.emplace_back(path, encode_png(img));
+    }
+    timings["bake"] = sw.lap();
+    if (glb) {
+      GlbTextures material;
+      material.base_color_png = std::move(files.front().second);
+      files.front().second.clear();
+      write_glb(mesh, material, files.front().second);
+    }
+    nlohmann::json dropped = nlohmann::json::array();
+    if (!o.mesh_out.empty()) {
+      const std::filesystem::path mesh_path(o.mesh_out);
+      const MeshFormat format = format_from_path(mesh_path);
+      if (format == MeshFormat::automatic)
+        throw InputError(
+            fmt::format("{}: cannot tell the mesh format from the extension", o.mesh_out));
+      for (const std::string& name : dropped_attributes(mesh, format)) dropped.push_back(name);
+      files.emplace_back(mesh_path, write_mesh_memory(mesh, format));
+    }
+    write_files_atomic(files);
+    if (!dropped.empty())
+      fmt::print(stderr, "limn: warning: {}: dropped {}\n", o.mesh_out,
+                 fmt::join(dropped.get<std::vector<std::string>>(), ", "));
+    j["mode"] = glb ? "glb" : "uv";
+    size_t opaque = 0;
+    for (const auto& t : images) opaque += t["opaque_texels"].get<size_t>();
+    j["image"] = {{"width", w}, {"height", h}, {"gutter", o.gutter}, {"opaque_texels", opaque}};
+    j["tiles"] = images;
+    j["mesh_out"] = o.mesh_out.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.mesh_out);
+    j["dropped"] = dropped;
   }
+  timings["write"] = sw.lap();
+  timings["total"] = sw.ms();
+  j["timings_ms"] = timings;
   if (o.json) {
     fmt::print("{}\n", j.dump(2));
-  } else if (png) {
-    fmt::print("{} on {} -> {}: {}x{} texels, {} opaque ({} px gutter), {:.0f} ms\n", o.texture,
-               o.mesh, o.out, w, h, j["image"]["opaque_texels"].get<size_t>(), o.gutter, sw.ms());
+  } else if (textured) {
+    fmt::print("{} on {} -> {}: {} tile{} of {}x{} texels, {} opaque ({} px gutter), {:.0f} ms\n",
+               o.texture, o.mesh, o.out, j["tiles"].size(), j["tiles"].size() == 1 ? "" : "s", w, h,
+               j["image"]["opaque_texels"].get<size_t>(), o.gutter, sw.ms());
   } else {
     fmt::print("{} on {} -> {}: {} vertices, {} painted, {:.0f} ms\n", o.texture, o.mesh, o.out,
                mesh.vertex_count(), j["painted_vertices"].get<size_t>(), sw.ms());
@@ -116,18 +208,33 @@ void run(const BakeOpts& o, CLI::App* cmd) {
 
 void add_bake(CLI::App& app) {
   auto* cmd = app.add_subcommand(
-      "bake", "Bake an octree texture into per-vertex colours or a UV texture PNG");
+      "bake",
+      "Bake an octree texture into per-vertex colours, or into UV textures: PNG (UDIM tiles "
+      "name.1001.png, ...) or a GLB with the texture in its material; --atlas makes the UVs");
   auto o = std::make_shared<BakeOpts>();
   cmd->add_option("TEXTURE", o->texture, "Octree texture (.lot)")->required();
   cmd->add_option("MESH", o->mesh, "Mesh to bake onto (OBJ, PLY, OFF, STL, glTF/GLB)")->required();
   add_weld_flag(*cmd, o->weld);
   add_repair_flags(*cmd, o->repair);
   cmd->add_option("-o,--output", o->out,
-                  "Output: .ply/.glb/.obj/.off (vertex colours) or .png (needs the mesh's UVs)")
+                  "Output: .png (UV texture; several UDIM tiles: <UDIM> in the name is replaced "
+                  "by 1001, 1002, ..., else the number goes before .png), .glb (a material with "
+                  "the texture when the mesh has UVs or --atlas, else vertex colours), "
+                  ".ply/.obj/.off (vertex colours)")
       ->required();
-  cmd->add_option("--size", o->size, "PNG: square image side in texels (default 1024)");
-  cmd->add_option("--resolution", o->resolution, "PNG: WxH instead of --size");
-  cmd->add_option("--gutter", o->gutter, "PNG: texels of dilation around the charts (default 8)");
+  cmd->add_flag("--atlas", o->atlas,
+                "Unwrap the mesh first (as limn unwrap) and bake into the new atlas");
+  cmd->add_option("--mesh-out", o->mesh_out,
+                  "Also write the mesh with the UVs baked into (needed with --atlas and .png)");
+  cmd->add_option("--size", o->size, "Square image (or atlas tile) side in texels (default 1024)");
+  cmd->add_option("--resolution", o->resolution, "WxH instead of --size (not with --atlas)");
+  cmd->add_option("--gutter", o->gutter, "Texels of dilation around the charts (default 8)");
+  cmd->add_option("--tiles", o->unwrap.tiles, "--atlas: UDIM tiles to use at most (1)");
+  cmd->add_option("--texels-per-unit", o->unwrap.texels_per_unit,
+                  "--atlas: texel density (default: the densest that fits)");
+  cmd->add_option("--padding", o->unwrap.padding, "--atlas: free texels around every chart (2)");
+  cmd->add_option("--max-stretch", o->unwrap.max_stretch,
+                  "--atlas: largest Sander L2 stretch a chart keeps (1.003)");
   cmd->add_flag("--nearest", o->nearest, "Nearest lookups instead of trilinear");
   cmd->add_option("--format", o->format, "Mesh format, overriding the extension");
   cmd->add_flag("--json", o->json, "Print one JSON object");

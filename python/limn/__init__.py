@@ -23,7 +23,7 @@ import numpy as np
 
 from ._limn import (InputError, Mesh, Painter, PatchHierarchy, PatchTable, RepairableError,
                     StencilTable, Texture, __version__, load_texture, patches, read_mesh,
-                    read_png, shape, shape_names)
+                    read_png, shape, shape_names, udim_tiles)
 from . import _limn
 
 __all__ = [
@@ -59,7 +59,9 @@ __all__ = [
     "simplify",
     "stencils",
     "subdivide",
+    "udim_tiles",
     "unwrap",
+    "write_glb",
     "write_mesh",
     "write_png",
 ]
@@ -387,13 +389,26 @@ def paint(mesh: Mesh, strokes, *, depth: int = 10, texture: Optional[Texture] = 
 
 def bake(texture: Texture, mesh: Mesh, *, uv: bool = False, size: int = 1024,
          resolution: Optional[tuple[int, int]] = None, gutter: int = 8,
-         nearest: bool = False) -> np.ndarray:
+         nearest: bool = False, udim: int = 1001) -> np.ndarray:
     """``limn bake``: the texture as RGBA per vertex ((n, 4) float32, the lookup at each vertex
     along its normal), or with ``uv=True`` into the mesh's UV layout as an (h, w, 4) uint8 image
-    (``size`` square or ``resolution`` (w, h); ``gutter`` pixels of dilation around charts).
-    nearest: nearest texels instead of the filtered colour the renderer shows.
+    (``size`` square or ``resolution`` (w, h); ``gutter`` pixels of dilation around charts) of
+    UDIM tile ``udim`` (see :func:`udim_tiles`; :func:`unwrap` makes an atlas).
+    nearest: nearest texels instead of the filtered colour the renderer shows. InputError when
+    the texture was painted on another mesh (under half of the vertices fall in its cells).
     """
     if not uv:
         return _limn._bake_vertex_colors(texture, mesh, nearest)
     width, height = resolution if resolution is not None else (size, size)
-    return _limn._bake_uv_image(texture, mesh, int(width), int(height), int(gutter), nearest)
+    return _limn._bake_uv_image(texture, mesh, int(width), int(height), int(gutter), nearest,
+                                int(udim))
+
+
+def write_glb(mesh: Mesh, path: str | os.PathLike, *, base_color: Optional[np.ndarray] = None,
+              metallic: float = 0.0, roughness: float = 1.0) -> None:
+    """Writes ``mesh`` as a GLB, atomically, with a pbrMetallicRoughness material: ``base_color``
+    an (h, w, 4) uint8 image (sRGB, e.g. from :func:`bake` with ``uv=True``) embedded as a PNG
+    and mapped by the mesh's UVs (TEXCOORD_0); ``metallic`` and ``roughness`` its factors. As
+    ``limn bake TEXTURE MESH -o asset.glb``.
+    """
+    _limn._write_glb(mesh, os.fspath(path), base_color, float(metallic), float(roughness))

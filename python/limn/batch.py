@@ -32,7 +32,7 @@ import time
 import uuid
 from typing import Any, Iterable, Optional
 
-STEPS = ("repair", "simplify", "subdivide", "paint", "bake")
+STEPS = ("repair", "simplify", "subdivide", "unwrap", "paint", "bake")
 
 
 class ManifestError(ValueError):
@@ -161,7 +161,9 @@ def run_asset(asset: dict[str, Any], force: bool = False) -> dict[str, Any]:
                     raise limn.InputError("bake: no texture (a paint step must come first)")
                 baked = limn.bake(texture, mesh, **options)
                 if output:
-                    if options.get("uv"):
+                    if options.get("uv") and str(output).lower().endswith(".glb"):
+                        limn.write_glb(mesh, output, base_color=baked)
+                    elif options.get("uv"):
                         limn.write_png(output, baked)
                     else:
                         colored = mesh.copy()

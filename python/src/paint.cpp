@@ -5,9 +5,13 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <optional>
+
 #include "arrays.hpp"
 #include "bindings.hpp"
 #include "jobs.hpp"
+#include "limn/io/mesh_io.hpp"
+#include "limn/mesh/file.hpp"
 #include "limn/paint/bake.hpp"
 #include "limn/paint/file.hpp"
 #include "limn/paint/lookup.hpp"
@@ -227,6 +231,7 @@ texture, each undoable (undo/redo), the surface's BVH built once.)")
         std::vector<float> colors;
         {
           py::gil_scoped_release unlocked;
+          check_texture_fits(t, mesh, "texture", "mesh");
           colors = bake_vertex_colors(t, mesh, o);
         }
         const auto n = py::ssize_t(colors.size() / 4);
@@ -235,20 +240,57 @@ texture, each undoable (undo/redo), the surface's BVH built once.)")
       py::arg("texture"), py::arg("mesh"), py::arg("nearest"));
   m.def(
       "_bake_uv_image",
-      [](const OctreeTexture& t, const Mesh& mesh, int width, int height, int gutter,
-         bool nearest) {
+      [](const OctreeTexture& t, const Mesh& mesh, int width, int height, int gutter, bool nearest,
+         int udim) {
         if (gutter < 0 || gutter > 1024) throw InputError("gutter: must be 0-1024 pixels");
+        if (udim < 1001 || udim > 1100)
+          throw InputError(fmt::format("udim {}: must be 1001-1100", udim));
         BakeOptions o;
         o.filtered = !nearest;
+        o.tile = udim - 1001;
         Image img;
         {
           py::gil_scoped_release unlocked;
+          check_texture_fits(t, mesh, "texture", "mesh");
           img = bake_uv_texture(t, mesh, width, height, gutter, o);
         }
         return owned(std::move(img.rgba), {py::ssize_t(img.height), py::ssize_t(img.width), 4});
       },
       py::arg("texture"), py::arg("mesh"), py::arg("width"), py::arg("height"), py::arg("gutter"),
-      py::arg("nearest"));
+      py::arg("nearest"), py::arg("udim"));
+  m.def(
+      "udim_tiles",
+      [](const Mesh& mesh) {
+        std::vector<int> tiles = uv_tiles(mesh);
+        for (int& t : tiles) t += 1001;
+        return tiles;
+      },
+      py::arg("mesh"),
+      "The UDIM tiles (1001, 1002, ...) that hold the mesh's UV triangles, ascending. InputError "
+      "when the mesh has no UVs, or a triangle reaches into two tiles or lies outside u, v in "
+      "[0, 10].");
+  m.def(
+      "_write_glb",
+      [](const Mesh& mesh, const std::filesystem::path& path,
+         std::optional<py::array_t<uint8_t, py::array::c_style | py::array::forcecast>> base_color,
+         float metallic, float roughness) {
+        GlbTextures textures;
+        textures.metallic = metallic, textures.roughness = roughness;
+        Image img;
+        if (base_color) {
+          if (base_color->ndim() != 3 || base_color->shape(2) != 4)
+            throw InputError("base_color: expected shape (h, w, 4) uint8 (RGBA)");
+          img.height = int(base_color->shape(0)), img.width = int(base_color->shape(1));
+          img.rgba.assign(base_color->data(), base_color->data() + base_color->size());
+        }
+        py::gil_scoped_release unlocked;
+        if (base_color) textures.base_color_png = encode_png(img);
+        std::string bytes;
+        write_glb(mesh, textures, bytes);
+        write_file_atomic(path, bytes);
+      },
+      py::arg("mesh"), py::arg("path"), py::arg("base_color"), py::arg("metallic"),
+      py::arg("roughness"));
 }
 
 }  // namespace limn::py_bind

@@ -140,3 +140,22 @@ def test_command_line(assets, tmp_path):
     summary = re.search(r"limn.batch: (\d+) done, (\d+) skipped, 3 failed", done.stderr)
     assert summary and int(summary[1]) + int(summary[2]) == 17, done.stderr
     assert len(results.read_text().splitlines()) == 20
+
+
+def test_an_asset_unwrapped_painted_and_baked_to_a_glb(tmp_path):
+    limn.write_mesh(limn.shape("torus"), tmp_path / "torus.obj")
+    (tmp_path / "fill.json").write_text(json.dumps(
+        {"strokes": [{"type": "fill", "color": [0.9, 0.3, 0.2, 1]}]}))
+    line = {"input": "torus.obj", "steps": [
+        {"unwrap": {"size": 128, "output": "torus-uv.obj"}},
+        {"paint": {"strokes": "fill.json"}},
+        {"bake": {"uv": True, "size": 128, "output": "torus.glb"}}]}
+    (tmp_path / "assets.jsonl").write_text(json.dumps(line) + "\n")
+    [asset] = batch.read_manifest(tmp_path / "assets.jsonl")
+    result = batch.run_asset(asset)
+    assert result["status"] == "done", result["error"]
+    assert result["stats"][0]["job"] == "unwrap" and result["stats"][0]["charts"] > 1
+    baked = limn.read_mesh(tmp_path / "torus.glb")
+    assert baked.uvs.shape[0] > 0
+    expected = limn.unwrap(limn.shape("torus"), size=128).mesh
+    assert baked.face_count == 2 * expected.face_count  # quads fanned to triangles

@@ -135,3 +135,50 @@ def test_a_painting_session_undoes_and_redoes(painted):
     session.texture.save(tmp / "session.lot")
     both.save(tmp / "both.lot")
     assert (tmp / "session.lot").read_bytes() == (tmp / "both.lot").read_bytes()
+
+
+def test_atlas_bakes_equal_the_cli(tmp_path, cli):
+    torus = limn.shape("torus")
+    limn.write_mesh(torus, tmp_path / "torus.obj")
+    script = {"strokes": [{"type": "fill", "color": [0.2, 0.6, 0.3, 1]},
+                          {"points": [[1.4, 0, 0], [0, 1.4, 0]], "radius": 0.3,
+                           "color": [1, 0, 0, 1], "depth": 8}]}
+    (tmp_path / "s.json").write_text(json.dumps(script))
+    cli("paint", tmp_path / "torus.obj", "--strokes", tmp_path / "s.json", "-o",
+        tmp_path / "t.lot")
+    texture = limn.paint(torus, script).texture
+
+    # One atlas into a GLB: the same bytes as `limn bake --atlas -o x.glb`.
+    report = cli("bake", tmp_path / "t.lot", tmp_path / "torus.obj", "--atlas", "--size", 256,
+                 "-o", tmp_path / "cli.glb", json_out=True)
+    atlas = limn.unwrap(torus, size=256)
+    assert limn.udim_tiles(atlas.mesh) == [1001]
+    image = limn.bake(texture, atlas.mesh, uv=True, size=256)
+    limn.write_glb(atlas.mesh, tmp_path / "py.glb", base_color=image)
+    assert (tmp_path / "py.glb").read_bytes() == (tmp_path / "cli.glb").read_bytes()
+    assert report["mode"] == "glb" and report["atlas"]["charts"] == atlas.stats["charts"]
+    back = limn.read_mesh(tmp_path / "py.glb")
+    assert back.face_count == 2 * torus.face_count and back.uvs.shape[1] == 2
+
+    # UDIM tiles: one PNG per tile, each equal to the Python bake of that tile.
+    cli("bake", tmp_path / "t.lot", tmp_path / "torus.obj", "--atlas", "--size", 64, "--tiles", 8,
+        "--texels-per-unit", 20, "-o", tmp_path / "p.<UDIM>.png", "--mesh-out",
+        tmp_path / "uv.obj")
+    udim = limn.unwrap(torus, size=64, tiles=8, texels_per_unit=20.0)
+    tiles = limn.udim_tiles(udim.mesh)
+    assert len(tiles) >= 2 and tiles[0] == 1001
+    for tile in tiles:
+        baked = limn.bake(texture, udim.mesh, uv=True, size=64, udim=tile)
+        assert np.array_equal(baked, limn.read_png(tmp_path / f"p.{tile}.png")), tile
+    assert not (tmp_path / f"p.{tiles[-1] + 1}.png").exists()
+    limn.write_mesh(udim.mesh, tmp_path / "py-uv.obj")
+    assert (tmp_path / "py-uv.obj").read_bytes() == (tmp_path / "uv.obj").read_bytes()
+
+    # A texture of another mesh is refused; a bad tile too.
+    plane = limn.Mesh.from_arrays(
+        np.array([[-1.4, 0, -1.4], [1.4, 0, -1.4], [1.4, 0, 1.4], [-1.4, 0, 1.4]], np.float32),
+        np.array([[0, 1, 2, 3]], np.uint32))
+    with pytest.raises(limn.InputError, match="painted on another mesh"):
+        limn.bake(texture, plane)
+    with pytest.raises(limn.InputError, match="udim 999"):
+        limn.bake(texture, atlas.mesh, uv=True, udim=999)

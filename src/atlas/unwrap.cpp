@@ -254,9 +254,10 @@ UnwrapResult unwrap_mesh(const Mesh& mesh, const UnwrapOptions& o, std::string_v
 
   // Charts top-down, then their borders smoothed (and the charts that no longer map well cut
   // again), then neighbours merged while their maps stay good.
-  // At a given density, a chart must also fit in a tile with its padding.
+  // At a given density, a chart must also fit in half a tile with its padding: charts nearly a
+  // tile long would each take a tile of their own.
   const double max_extent =
-      o.texels_per_unit > 0 ? (o.size - 2 * o.padding - 2) / o.texels_per_unit : INFINITY;
+      o.texels_per_unit > 0 ? (o.size / 2 - 2 * o.padding - 2) / o.texels_per_unit : INFINITY;
   Charter charter(s, o.max_stretch, max_extent);
   std::vector<atlas::Chart> charts = charter.chart_all(components(s));
   std::vector<uint32_t> label = face_labels(charts, s.face_count());

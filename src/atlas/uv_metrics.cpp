@@ -125,4 +125,51 @@ UvMetrics measure_uvs(const Mesh& mesh, int size) {
   return m;
 }
 
+std::vector<uint8_t> uv_layout_image(const Mesh& mesh, std::span<const uint32_t> face_chart,
+                                     int size, int tile) {
+  if (mesh.uvs.empty() || mesh.uv_indices.size() != mesh.corner_count())
+    throw InputError("mesh: no texture coordinates to draw");
+  if (size < 1 || size > 16384)
+    throw InputError(fmt::format("image size {}: must be 1-16384", size));
+  const double tu = tile % 10, tv = tile / 10;
+  std::vector<uint8_t> rgba(size_t(size) * size * 4, 255);
+  for (size_t f = 0; f < mesh.face_count(); ++f) {
+    // A colour per chart from a hash, kept away from white.
+    uint32_t h = (f < face_chart.size() ? face_chart[f] : 0) * 2654435761u + 0x9e3779b9u;
+    h ^= h >> 15, h *= 0x85ebca6bu, h ^= h >> 13;
+    const uint8_t color[3] = {uint8_t(40 + (h & 0xff) * 170 / 255),
+                              uint8_t(40 + ((h >> 8) & 0xff) * 170 / 255),
+                              uint8_t(40 + ((h >> 16) & 0xff) * 170 / 255)};
+    const uint32_t first = mesh.face_offsets[f];
+    for (uint32_t k = 1; k + 1 < mesh.face_size(f); ++k) {
+      double x[3], y[3];
+      const uint32_t c[3] = {first, first + k, first + k + 1};
+      for (int i = 0; i < 3; ++i) {
+        const float* w = &mesh.uvs[2 * size_t(mesh.uv_indices[c[i]])];
+        x[i] = (w[0] - tu) * size, y[i] = (1 - (w[1] - tv)) * size;
+      }
+      const double area = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
+      if (!(area != 0)) continue;
+      const int x0 = std::max(0, int(std::floor(std::min({x[0], x[1], x[2]}))));
+      const int x1 = std::min(size - 1, int(std::ceil(std::max({x[0], x[1], x[2]}))));
+      const int y0 = std::max(0, int(std::floor(std::min({y[0], y[1], y[2]}))));
+      const int y1 = std::min(size - 1, int(std::ceil(std::max({y[0], y[1], y[2]}))));
+      for (int py = y0; py <= y1; ++py)
+        for (int px = x0; px <= x1; ++px) {
+          const double cx = px + 0.5, cy = py + 0.5;
+          bool inside = true;
+          for (int e = 0; e < 3 && inside; ++e) {
+            const int a = e, b = (e + 1) % 3;
+            const double side = (x[b] - x[a]) * (cy - y[a]) - (y[b] - y[a]) * (cx - x[a]);
+            inside = area > 0 ? side >= 0 : side <= 0;
+          }
+          if (!inside) continue;
+          uint8_t* px_rgba = &rgba[(size_t(py) * size + px) * 4];
+          px_rgba[0] = color[0], px_rgba[1] = color[1], px_rgba[2] = color[2];
+        }
+    }
+  }
+  return rgba;
+}
+
 }  // namespace limn

@@ -41,6 +41,12 @@ int add_accessor(tinygltf::Model& model, int view, int component, int type, size
 }  // namespace
 
 void write_glb(const Mesh& m, std::string& out) {
+  GlbTextures none;
+  none.roughness = 0.7f;
+  write_glb(m, none, out);
+}
+
+void write_glb(const Mesh& m, const GlbTextures& textures, std::string& out) {
   if (m.face_count() == 0) throw InputError("cannot write glTF: the mesh has no faces");
   const bool has_n = !m.normal_indices.empty(), has_uv = !m.uv_indices.empty();
   const bool has_c = !m.colors.empty();
@@ -108,9 +114,30 @@ void write_glb(const Mesh& m, std::string& out) {
 
   tinygltf::Material mat;
   mat.name = "limn";
-  mat.pbrMetallicRoughness.metallicFactor = 0.0;
-  mat.pbrMetallicRoughness.roughnessFactor = 0.7;
+  mat.pbrMetallicRoughness.metallicFactor = textures.metallic;
+  mat.pbrMetallicRoughness.roughnessFactor = textures.roughness;
   mat.doubleSided = true;  // scans and cages are often open; show both sides
+  // Each texture: its PNG in the binary chunk, an image naming that view, a texture naming the
+  // image (sampled with the default sampler: linear, repeat).
+  auto add_texture = [&](const std::string& png, const char* name) {
+    if (png.empty()) return -1;
+    if (!has_uv) throw InputError(fmt::format("cannot write glTF: a {} texture needs UVs", name));
+    std::vector<unsigned char> bytes(png.begin(), png.end());
+    tinygltf::Image image;
+    image.name = name;
+    image.mimeType = "image/png";
+    image.bufferView = add_view(model, bin, bytes, 0);  // target 0: no vertex or index data
+    model.images.push_back(image);
+    tinygltf::Texture texture;
+    texture.source = int(model.images.size() - 1);
+    model.textures.push_back(texture);
+    return int(model.textures.size() - 1);
+  };
+  mat.pbrMetallicRoughness.baseColorTexture.index =
+      add_texture(textures.base_color_png, "base_color");
+  mat.pbrMetallicRoughness.metallicRoughnessTexture.index =
+      add_texture(textures.metallic_roughness_png, "metallic_roughness");
+  mat.normalTexture.index = add_texture(textures.normal_png, "normal");
   model.materials.push_back(mat);
   prim.material = 0;
 

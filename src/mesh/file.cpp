@@ -8,6 +8,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <vector>
 
 #include "limn/mesh/mesh.hpp"
 
@@ -50,11 +51,14 @@ std::string read_file(const std::filesystem::path& path) {
   return data;
 }
 
-void write_file_atomic(const std::filesystem::path& path, std::string_view bytes) {
+namespace {
+
+// Writes bytes to a hidden temporary file beside `path` (same file system, so a rename is
+// atomic), flushed; returns its name. Throws std::runtime_error naming the path.
+std::string stage(const std::filesystem::path& path, std::string_view bytes) {
   const std::string target = path.string();
   std::filesystem::path dir = path.parent_path();
   if (dir.empty()) dir = ".";
-  // Hidden temp name beside the target (same filesystem, so rename is atomic).
   // (fmt rather than string concatenation: GCC 12's -Wrestrict misfires on the latter at -O3.)
   std::string tmp = fmt::format("{}/.{}.limn-XXXXXX", dir.string(), path.filename().string());
   const int fd = ::mkstemp(tmp.data());
@@ -81,10 +85,39 @@ void write_file_atomic(const std::filesystem::path& path, std::string_view bytes
     ::unlink(tmp.c_str());
     throw std::runtime_error(fmt::format("{}: close failed: {}", target, std::strerror(e)));
   }
-  if (::rename(tmp.c_str(), target.c_str()) != 0) {
+  return tmp;
+}
+
+void commit(const std::string& tmp, const std::filesystem::path& path) {
+  if (::rename(tmp.c_str(), path.c_str()) != 0) {
     const int e = errno;
     ::unlink(tmp.c_str());
-    throw std::runtime_error(fmt::format("{}: cannot replace: {}", target, std::strerror(e)));
+    throw std::runtime_error(
+        fmt::format("{}: cannot replace: {}", path.string(), std::strerror(e)));
+  }
+}
+
+}  // namespace
+
+void write_file_atomic(const std::filesystem::path& path, std::string_view bytes) {
+  commit(stage(path, bytes), path);
+}
+
+void write_files_atomic(std::span<const std::pair<std::filesystem::path, std::string>> files) {
+  std::vector<std::string> staged;
+  try {
+    for (const auto& [path, bytes] : files) staged.push_back(stage(path, bytes));
+  } catch (...) {
+    for (const std::string& tmp : staged) ::unlink(tmp.c_str());
+    throw;
+  }
+  for (size_t i = 0; i < files.size(); ++i) {
+    try {
+      commit(staged[i], files[i].first);
+    } catch (...) {
+      for (size_t j = i + 1; j < files.size(); ++j) ::unlink(staged[j].c_str());
+      throw;
+    }
   }
 }
 

@@ -68,6 +68,8 @@ Image bake_uv_texture(const OctreeTexture& t, const Mesh& mesh, int width, int h
     throw InputError("image size " + std::to_string(width) + "x" + std::to_string(height) +
                      ": each side must be 1-16384");
   if (gutter < 0 || gutter > 1024) throw InputError("gutter: must be 0-1024 pixels");
+  if (opt.tile < 0 || opt.tile > 99) throw InputError("UDIM tile: must be 0-99 (1001-1100)");
+  const float tile_u = float(opt.tile % 10), tile_v = float(opt.tile / 10);
   const size_t W = size_t(width), H = size_t(height);
   // Which fan triangle covers each texel centre (rasterised serially, looked up in parallel).
   struct Tri {
@@ -84,9 +86,12 @@ Image bake_uv_texture(const OctreeTexture& t, const Mesh& mesh, int width, int h
       for (int i = 0; i < 3; ++i) {
         const size_t ui = mesh.uv_indices[corner[i]];
         // Texel space: x right, y down from the top row (v = 1).
-        uv[i][0] = mesh.uvs[2 * ui] * float(width);
-        uv[i][1] = (1.0f - mesh.uvs[2 * ui + 1]) * float(height);
+        uv[i][0] = (mesh.uvs[2 * ui] - tile_u) * float(width);
+        uv[i][1] = (1.0f - (mesh.uvs[2 * ui + 1] - tile_v)) * float(height);
       }
+      const float cu = (uv[0][0] + uv[1][0] + uv[2][0]) / (3 * float(width));
+      const float cv = (uv[0][1] + uv[1][1] + uv[2][1]) / (3 * float(height));
+      if (!(cu >= 0 && cu < 1 && cv > 0 && cv <= 1)) continue;  // another tile's triangle
       const float den = (uv[1][1] - uv[2][1]) * (uv[0][0] - uv[2][0]) +
                         (uv[2][0] - uv[1][0]) * (uv[0][1] - uv[2][1]);
       if (!(std::fabs(den) > 0) || !std::isfinite(den)) continue;
@@ -177,6 +182,49 @@ Image bake_uv_texture(const OctreeTexture& t, const Mesh& mesh, int width, int h
     for (size_t i : ring) filled[i] = 1;
   }
   return img;
+}
+
+void check_texture_fits(const OctreeTexture& t, const Mesh& mesh, const std::string& texture_name,
+                        const std::string& mesh_name) {
+  const size_t nv = mesh.vertex_count();
+  if (nv == 0) return;
+  const size_t step = std::max<size_t>(1, nv / 4096);
+  OctreeSampler s(t);
+  size_t tried = 0, inside = 0;
+  for (size_t v = 0; v < nv; v += step) {
+    Rgba8 c;
+    inside += s.nearest(&mesh.positions[3 * v], nullptr, c) ? 1 : 0;
+    ++tried;
+  }
+  if (2 * inside < tried)
+    throw InputError(texture_name + ": painted on another mesh: only " + std::to_string(inside) +
+                     " of " + std::to_string(tried) + " vertices of " + mesh_name +
+                     " fall in its cells");
+}
+
+std::vector<int> uv_tiles(const Mesh& mesh, size_t* outside) {
+  if (mesh.uvs.empty() || mesh.uv_indices.size() != mesh.corner_count())
+    throw InputError("mesh: no texture coordinates (uvs)");
+  std::vector<uint8_t> used(100, 0);
+  size_t lost = 0;
+  for (size_t f = 0; f < mesh.face_count(); ++f) {
+    const uint32_t o = mesh.face_offsets[f], n = mesh.face_size(f);
+    for (uint32_t k = 1; k + 1 < n; ++k) {
+      double c[2] = {0, 0};
+      for (uint32_t corner : {o, o + k, o + k + 1})
+        for (int a = 0; a < 2; ++a) c[a] += mesh.uvs[2 * size_t(mesh.uv_indices[corner]) + a] / 3.0;
+      if (!(c[0] >= 0 && c[0] < 10 && c[1] >= 0 && c[1] < 10)) {  // NaN too
+        ++lost;
+        continue;
+      }
+      used[size_t(std::floor(c[0]) + 10 * std::floor(c[1]))] = 1;
+    }
+  }
+  if (outside) *outside = lost;
+  std::vector<int> tiles;
+  for (int t = 0; t < 100; ++t)
+    if (used[size_t(t)]) tiles.push_back(t);
+  return tiles;
 }
 
 std::string encode_png(const Image& image) {

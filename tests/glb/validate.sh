@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Every kind of GLB limn writes, checked by the Khronos glTF validator: shapes, a converted cage
-# with UV seams, an unwrapped atlas, uniform and adaptive subdivision, simplification with UVs,
-# the demo's painted bake. Zero errors allowed (warnings are printed).
+# with UV seams, an unwrapped atlas, a bake into a material, uniform and adaptive subdivision,
+# simplification with UVs, the demo's painted bake. Zero errors allowed (warnings are printed).
 # Usage: validate.sh LIMN_CLI NODE_MODULES_DIR SHARED_MODELS_DIR
 set -euo pipefail
 limn=$1 modules=$2 models=$3
@@ -16,6 +16,9 @@ trap 'rm -rf "$work"' EXIT
 "$limn" shape torus -o "$work/torus.glb" >/dev/null
 "$limn" shape torus -o "$work/torus.obj" >/dev/null
 "$limn" unwrap "$work/torus.obj" -o "$work/torus-unwrapped.glb" --size 256 >/dev/null
+echo '{"strokes": [{"type": "fill", "color": [0.2, 0.6, 0.3, 1]}]}' >"$work/fill.json"
+"$limn" paint "$work/torus.obj" --strokes "$work/fill.json" -o "$work/torus.lot" >/dev/null
+"$limn" bake "$work/torus.lot" "$work/torus.obj" --atlas --size 256 -o "$work/torus-baked.glb" >/dev/null
 "$limn" demo --quick -o "$work/demo" >/dev/null 2>&1
 if [[ -d "$models/osd" ]]; then
   car=$models/osd/catmark_car.obj bigguy=$models/quads/bigguy.obj

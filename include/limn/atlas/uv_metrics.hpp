@@ -3,6 +3,9 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
 
 #include "limn/mesh/mesh.hpp"
 
@@ -28,5 +31,11 @@ struct UvMetrics {
 /// texels per tile side. Throws InputError when the mesh has no UVs or size is outside 1-16384.
 /// O(corners + texels covered).
 UvMetrics measure_uvs(const Mesh& mesh, int size);
+
+/// A picture of UDIM tile `tile`'s layout, size x size RGBA8 (rows top to bottom, v up): each
+/// face filled in a colour of its chart (face_chart, one per face; empty: one colour), white
+/// elsewhere. For reports. O(size^2 + texels covered).
+std::vector<uint8_t> uv_layout_image(const Mesh& mesh, std::span<const uint32_t> face_chart,
+                                     int size, int tile = 0);
 
 }  // namespace limn

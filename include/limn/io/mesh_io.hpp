@@ -122,4 +122,17 @@ void write_stl(const Mesh& mesh, std::string& out);
 /// mesh has vertex colours; corners are split only where attributes differ.
 void write_glb(const Mesh& mesh, std::string& out);
 
+/// The textures of a GLB's pbrMetallicRoughness material, as encoded PNG files (empty: none),
+/// embedded in the GLB's binary chunk.
+struct GlbTextures {
+  std::string base_color_png;          ///< sRGB colour and alpha
+  std::string metallic_roughness_png;  ///< linear; green: roughness, blue: metalness
+  std::string normal_png;              ///< tangent space, linear
+  float metallic = 0, roughness = 1;   ///< factors the textures are multiplied by
+};
+
+/// write_glb with the material's textures (the mesh needs UVs for them: TEXCOORD_0). Without a
+/// metallic-roughness texture the factors alone apply (metallic 0: a painted dielectric).
+void write_glb(const Mesh& mesh, const GlbTextures& textures, std::string& out);
+
 }  // namespace limn

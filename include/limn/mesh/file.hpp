@@ -3,8 +3,10 @@
 #pragma once
 
 #include <filesystem>
+#include <span>
 #include <string>
 #include <string_view>
+#include <utility>
 
 namespace limn {
 
@@ -12,6 +14,11 @@ namespace limn {
 /// Throws std::runtime_error naming the path on failure; the old file is then untouched.
 /// O(bytes).
 void write_file_atomic(const std::filesystem::path& path, std::string_view bytes);
+
+/// Writes several files, all or none: each is written to its temporary file first, and only
+/// when all are written are they renamed into place (a failure before that removes them all and
+/// leaves the old files untouched). Throws std::runtime_error naming the path. O(bytes).
+void write_files_atomic(std::span<const std::pair<std::filesystem::path, std::string>> files);
 
 /// Reads a whole file (at most 16 GB). Throws InputError for missing, unreadable, oversized or
 /// directory paths. O(file size).

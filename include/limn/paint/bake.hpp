@@ -12,6 +12,9 @@ namespace limn {
 
 struct BakeOptions {
   bool filtered = true;  ///< trilinear at leaf level (OctreeSampler::filtered), else nearest
+  /// bake_uv_texture: the UDIM tile to bake (u in [tile % 10, +1], v in [tile / 10, +1]; UDIM
+  /// number 1001 + tile); triangles in other tiles are left out.
+  int tile = 0;
 };
 
 /// RGBA (floats in [0,1]) per vertex: the lookup at the vertex with its area-weighted normal
@@ -25,15 +28,31 @@ struct Image {
   std::vector<uint8_t> rgba;
 };
 
-/// Bakes into the mesh's UVs (OpenGL convention: v = 0 is the bottom row). Every texel whose
+/// Bakes into the mesh's UVs (OpenGL convention: v = 0 is the bottom row of tile opt.tile). Every
+/// texel whose
 /// centre lies in a face's UV triangle (faces fanned) takes the lookup at the matching surface
 /// point, seen along that triangle's normal; texels outside every triangle stay transparent
 /// except for `gutter` rings of dilation around the charts (each new texel the mean of its filled
 /// 8-neighbours), so bilinear filtering and mips do not bleed the background into seams. Throws
-/// InputError when the mesh has no UVs or the size is outside 1-16384. Parallel.
+/// InputError when the mesh has no UVs, the size is outside 1-16384 or the tile outside 0-99.
+/// Parallel.
 /// O(W H + texels covered * depth).
 Image bake_uv_texture(const OctreeTexture& t, const Mesh& mesh, int width, int height,
                       int gutter = 8, const BakeOptions& opt = {});
+
+/// Throws InputError "TEXTURE_NAME: painted on another mesh ..." when under half of the mesh's
+/// vertices (up to 4096 of them, evenly spread) fall in a leaf of the texture: the texture's
+/// cells follow the surface it was made for, so another mesh mostly misses them. A subdivided,
+/// simplified or unwrapped version of the painted mesh passes. O(min(V, 4096) depth).
+void check_texture_fits(const OctreeTexture& t, const Mesh& mesh, const std::string& texture_name,
+                        const std::string& mesh_name);
+
+/// The UDIM tiles (0-99; UDIM number 1001 + tile) that hold the centres of the mesh's UV
+/// triangles, ascending: the images bake_uv_texture makes for them hold every triangle (a
+/// triangle reaching past its tile is cut at the tile's edge). `outside` (may be null) receives
+/// the triangles whose centre lies outside u, v in [0, 10) (or is not a number), which no tile
+/// holds. Throws InputError when the mesh has no UVs. O(corners).
+std::vector<int> uv_tiles(const Mesh& mesh, size_t* outside = nullptr);
 
 /// PNG bytes of an image (stb_image_write).
 std::string encode_png(const Image& image);
