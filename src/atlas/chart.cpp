@@ -160,31 +160,6 @@ bool boundary_crosses(const Chart& ch) {
 
 namespace {
 
-// Splits `label` (0 or 1 per local face) into edge-connected pieces of equal label.
-std::vector<std::vector<uint32_t>> connected_pieces(const VsaSurface& sub,
-                                                    const std::vector<uint32_t>& label,
-                                                    std::span<const uint32_t> faces) {
-  std::vector<std::vector<uint32_t>> pieces;
-  std::vector<uint8_t> seen(label.size(), 0);
-  std::vector<uint32_t> stack;
-  for (uint32_t f0 = 0; f0 < label.size(); ++f0) {
-    if (seen[f0]) continue;
-    pieces.emplace_back();
-    seen[f0] = 1;
-    stack.push_back(f0);
-    while (!stack.empty()) {
-      const uint32_t f = stack.back();
-      stack.pop_back();
-      pieces.back().push_back(faces[f]);
-      for (uint32_t c = sub.mesh->face_offsets[f]; c < sub.mesh->face_offsets[f + 1]; ++c) {
-        const uint32_t g = sub.across(c);
-        if (g != kNone && !seen[g] && label[g] == label[f]) seen[g] = 1, stack.push_back(g);
-      }
-    }
-  }
-  return pieces;
-}
-
 // Hop distances across edges from face `from`; returns the farthest face.
 uint32_t face_distances(const VsaSurface& sub, uint32_t from, std::vector<uint32_t>& dist) {
   dist.assign(sub.face_count(), kNone);
@@ -204,6 +179,30 @@ uint32_t face_distances(const VsaSurface& sub, uint32_t from, std::vector<uint32
 }
 
 }  // namespace
+
+std::vector<std::vector<uint32_t>> label_pieces(const VsaSurface& s,
+                                                std::span<const uint32_t> label,
+                                                std::span<const uint32_t> names) {
+  std::vector<std::vector<uint32_t>> pieces;
+  std::vector<uint8_t> seen(label.size(), 0);
+  std::vector<uint32_t> stack;
+  for (uint32_t f0 = 0; f0 < label.size(); ++f0) {
+    if (seen[f0]) continue;
+    pieces.emplace_back();
+    seen[f0] = 1;
+    stack.push_back(f0);
+    while (!stack.empty()) {
+      const uint32_t f = stack.back();
+      stack.pop_back();
+      pieces.back().push_back(names.empty() ? f : names[f]);
+      for (uint32_t c = s.mesh->face_offsets[f]; c < s.mesh->face_offsets[f + 1]; ++c) {
+        const uint32_t g = s.across(c);
+        if (g != kNone && !seen[g] && label[g] == label[f]) seen[g] = 1, stack.push_back(g);
+      }
+    }
+  }
+  return pieces;
+}
 
 std::vector<std::vector<uint32_t>> split_faces(const VsaSurface& s,
                                                std::span<const uint32_t> faces) {
@@ -248,7 +247,7 @@ std::vector<std::vector<uint32_t>> split_faces(const VsaSurface& s,
     face_distances(ss, b, db);
     for (size_t f = 0; f < faces.size(); ++f) label[f] = db[f] < da[f];
   }
-  return connected_pieces(ss, label, faces);
+  return label_pieces(ss, label, faces);
 }
 
 }  // namespace limn::atlas

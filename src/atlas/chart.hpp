@@ -59,6 +59,12 @@ ChartQuality chart_quality(const VsaSurface& s, const Chart& chart);
 /// triangle flips). O(B log B) for B boundary edges in practice (grid buckets).
 bool boundary_crosses(const Chart& chart);
 
+/// The edge-connected pieces of faces with equal labels (one per face of `s`), each as face ids,
+/// or as names[face] when `names` is given. O(corners).
+std::vector<std::vector<uint32_t>> label_pieces(const VsaSurface& s,
+                                                std::span<const uint32_t> label,
+                                                std::span<const uint32_t> names = {});
+
 /// Cuts a chart's faces in two along its sharpest feature (VSA with two proxies), or in two
 /// halves by distance across faces when VSA cannot; returns the edge-connected pieces.
 std::vector<std::vector<uint32_t>> split_faces(const VsaSurface& s,

@@ -149,30 +149,6 @@ void smooth_borders(const VsaSurface& s, std::vector<uint32_t>& label, int passe
   }
 }
 
-// Face sets of the labels (each edge-connected piece on its own).
-std::vector<std::vector<uint32_t>> label_pieces(const VsaSurface& s,
-                                                const std::vector<uint32_t>& label) {
-  std::vector<std::vector<uint32_t>> out;
-  std::vector<uint8_t> seen(label.size(), 0);
-  std::vector<uint32_t> stack;
-  for (uint32_t f0 = 0; f0 < label.size(); ++f0) {
-    if (seen[f0]) continue;
-    out.emplace_back();
-    seen[f0] = 1;
-    stack.push_back(f0);
-    while (!stack.empty()) {
-      const uint32_t f = stack.back();
-      stack.pop_back();
-      out.back().push_back(f);
-      for (uint32_t c = s.mesh->face_offsets[f]; c < s.mesh->face_offsets[f + 1]; ++c) {
-        const uint32_t g = s.across(c);
-        if (g != kNone && !seen[g] && label[g] == label[f]) seen[g] = 1, stack.push_back(g);
-      }
-    }
-  }
-  return out;
-}
-
 // Merges neighbouring charts while the merged map stays good and compact, the pairs sharing the
 // longest borders first.
 void merge_charts(Charter& charter, std::vector<atlas::Chart>& charts) {
@@ -220,29 +196,6 @@ void merge_charts(Charter& charter, std::vector<atlas::Chart>& charts) {
   }
 }
 
-// Edge-connected components of the mesh's faces.
-std::vector<std::vector<uint32_t>> components(const VsaSurface& s) {
-  std::vector<std::vector<uint32_t>> out;
-  std::vector<uint8_t> seen(s.face_count(), 0);
-  std::vector<uint32_t> stack;
-  for (uint32_t f0 = 0; f0 < s.face_count(); ++f0) {
-    if (seen[f0]) continue;
-    out.emplace_back();
-    seen[f0] = 1;
-    stack.push_back(f0);
-    while (!stack.empty()) {
-      const uint32_t f = stack.back();
-      stack.pop_back();
-      out.back().push_back(f);
-      for (uint32_t c = s.mesh->face_offsets[f]; c < s.mesh->face_offsets[f + 1]; ++c) {
-        const uint32_t g = s.across(c);
-        if (g != kNone && !seen[g]) seen[g] = 1, stack.push_back(g);
-      }
-    }
-  }
-  return out;
-}
-
 }  // namespace
 
 UnwrapResult unwrap_mesh(const Mesh& mesh, const UnwrapOptions& o, std::string_view name) {
@@ -259,10 +212,11 @@ UnwrapResult unwrap_mesh(const Mesh& mesh, const UnwrapOptions& o, std::string_v
   const double max_extent =
       o.texels_per_unit > 0 ? (o.size / 2 - 2 * o.padding - 2) / o.texels_per_unit : INFINITY;
   Charter charter(s, o.max_stretch, max_extent);
-  std::vector<atlas::Chart> charts = charter.chart_all(components(s));
+  std::vector<atlas::Chart> charts =
+      charter.chart_all(atlas::label_pieces(s, std::vector<uint32_t>(s.face_count(), 0)));
   std::vector<uint32_t> label = face_labels(charts, s.face_count());
   smooth_borders(s, label, 4);
-  charts = charter.chart_all(label_pieces(s, label));
+  charts = charter.chart_all(atlas::label_pieces(s, label));
   merge_charts(charter, charts);
   st.splits = charter.splits;
   double l2 = 0, area = 0;

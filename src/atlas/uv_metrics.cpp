@@ -14,38 +14,45 @@ namespace limn {
 
 namespace {
 
-// Counts, per texel centre of one tile, the triangles that hold it strictly inside.
+// Calls f(px, py) for each texel centre (px + 0.5, py + 0.5) of a size x size grid inside the
+// triangle (x, y in texels, either orientation). A centre on an edge belongs to one side only
+// (the edge's direction decides, as GPUs' top-left rule does), so two triangles sharing an edge
+// never both take it and never leave it out.
+template <class F>
+void for_texels_inside(double x[3], double y[3], int size, F&& f) {
+  const double area = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
+  if (!(area != 0)) return;
+  if (area < 0) std::swap(x[1], x[2]), std::swap(y[1], y[2]);  // a mirrored triangle still covers
+  const int x0 = std::max(0, int(std::floor(std::min({x[0], x[1], x[2]}) - 0.5)));
+  const int x1 = std::min(size - 1, int(std::ceil(std::max({x[0], x[1], x[2]}) - 0.5)));
+  const int y0 = std::max(0, int(std::floor(std::min({y[0], y[1], y[2]}) - 0.5)));
+  const int y1 = std::min(size - 1, int(std::ceil(std::max({y[0], y[1], y[2]}) - 0.5)));
+  for (int py = y0; py <= y1; ++py)
+    for (int px = x0; px <= x1; ++px) {
+      const double cx = px + 0.5, cy = py + 0.5;
+      bool inside = true;
+      for (int e = 0; e < 3 && inside; ++e) {
+        const int a = e, b = (e + 1) % 3;
+        const double dx = x[b] - x[a], dy = y[b] - y[a];
+        const double w = dx * (cy - y[a]) - dy * (cx - x[a]);
+        inside = w > 0 || (w == 0 && (dy < 0 || (dy == 0 && dx > 0)));
+      }
+      if (inside) f(px, py);
+    }
+}
+
+// Counts, per texel centre of one tile, the triangles that hold it.
 class TileRaster {
  public:
   explicit TileRaster(int size) : size_(size), count_(size_t(size) * size, 0) {}
-  // (u, v) in tile units [0,1]; v up, as the rows of the count image. A centre on an edge
-  // belongs to one side only (the edge's direction decides, as GPUs' top-left rule does), so two
-  // triangles sharing an edge never count twice and never leave a gap.
+  // (u, v) in tile units [0,1]; v up, as the rows of the count image.
   void add(const double u[3], const double v[3]) {
     double x[3], y[3];
     for (int i = 0; i < 3; ++i) x[i] = u[i] * size_, y[i] = v[i] * size_;
-    const double area = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
-    if (area == 0) return;
-    if (area < 0) std::swap(x[1], x[2]), std::swap(y[1], y[2]);  // a mirrored triangle still covers
-    const int x0 = std::max(0, int(std::floor(std::min({x[0], x[1], x[2]}) - 0.5)));
-    const int x1 = std::min(size_ - 1, int(std::ceil(std::max({x[0], x[1], x[2]}) - 0.5)));
-    const int y0 = std::max(0, int(std::floor(std::min({y[0], y[1], y[2]}) - 0.5)));
-    const int y1 = std::min(size_ - 1, int(std::ceil(std::max({y[0], y[1], y[2]}) - 0.5)));
-    for (int py = y0; py <= y1; ++py)
-      for (int px = x0; px <= x1; ++px) {
-        const double cx = px + 0.5, cy = py + 0.5;
-        bool inside = true;
-        for (int e = 0; e < 3 && inside; ++e) {
-          const int a = e, b = (e + 1) % 3;
-          const double dx = x[b] - x[a], dy = y[b] - y[a];
-          const double w = dx * (cy - y[a]) - dy * (cx - x[a]);
-          inside = w > 0 || (w == 0 && (dy < 0 || (dy == 0 && dx > 0)));
-        }
-        if (inside) {
-          uint8_t& c = count_[size_t(py) * size_ + px];
-          if (c < 255) ++c;
-        }
-      }
+    for_texels_inside(x, y, size_, [&](int px, int py) {
+      uint8_t& c = count_[size_t(py) * size_ + px];
+      if (c < 255) ++c;
+    });
   }
   void tally(size_t& covered, size_t& overlapping) const {
     for (uint8_t c : count_) covered += c > 0, overlapping += c > 1;
@@ -148,25 +155,10 @@ std::vector<uint8_t> uv_layout_image(const Mesh& mesh, std::span<const uint32_t>
         const float* w = &mesh.uvs[2 * size_t(mesh.uv_indices[c[i]])];
         x[i] = (w[0] - tu) * size, y[i] = (1 - (w[1] - tv)) * size;
       }
-      const double area = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
-      if (!(area != 0)) continue;
-      const int x0 = std::max(0, int(std::floor(std::min({x[0], x[1], x[2]}))));
-      const int x1 = std::min(size - 1, int(std::ceil(std::max({x[0], x[1], x[2]}))));
-      const int y0 = std::max(0, int(std::floor(std::min({y[0], y[1], y[2]}))));
-      const int y1 = std::min(size - 1, int(std::ceil(std::max({y[0], y[1], y[2]}))));
-      for (int py = y0; py <= y1; ++py)
-        for (int px = x0; px <= x1; ++px) {
-          const double cx = px + 0.5, cy = py + 0.5;
-          bool inside = true;
-          for (int e = 0; e < 3 && inside; ++e) {
-            const int a = e, b = (e + 1) % 3;
-            const double side = (x[b] - x[a]) * (cy - y[a]) - (y[b] - y[a]) * (cx - x[a]);
-            inside = area > 0 ? side >= 0 : side <= 0;
-          }
-          if (!inside) continue;
-          uint8_t* px_rgba = &rgba[(size_t(py) * size + px) * 4];
-          px_rgba[0] = color[0], px_rgba[1] = color[1], px_rgba[2] = color[2];
-        }
+      for_texels_inside(x, y, size, [&](int px, int py) {
+        uint8_t* out = &rgba[(size_t(py) * size + px) * 4];
+        out[0] = color[0], out[1] = color[1], out[2] = color[2];
+      });
     }
   }
   return rgba;
