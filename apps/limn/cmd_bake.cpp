@@ -32,6 +32,10 @@ std::string lower_extension(const std::filesystem::path& p) {
   return ext;
 }
 
+bool names_tile(const std::string& out) {
+  return out.find("<UDIM>") != std::string::npos || out.find("<udim>") != std::string::npos;
+}
+
 // The file of UDIM tile `tile` (UDIM number 1001 + tile): OUT's "<UDIM>" replaced by the number,
 // or the number put before the extension ("paint.png" -> "paint.1001.png").
 std::filesystem::path tile_path(const std::string& out, int tile) {
@@ -152,9 +156,9 @@ void run(const BakeOpts& o, CLI::App* cmd) {
       const Image img = bake_uv_texture(tex, mesh, w, h, o.gutter, bo);
       size_t opaque = 0;
       for (size_t i = 3; i < img.rgba.size(); i += 4) opaque += img.rgba[i] != 0;
-      const std::filesystem::path path = glb                            ? out
-                                         : tiles == std::vector<int>{0} ? out
-                                                                        : tile_path(o.out, tile);
+      // One tile keeps OUT as given, unless OUT names the tile with <UDIM>.
+      const bool as_given = glb || (tiles == std::vector<int>{0} && !names_tile(o.out));
+      const std::filesystem::path path = as_given ? out : tile_path(o.out, tile);
       images.push_back({{"udim", 1001 + tile},
                         {"file", glb ? nlohmann::json(nullptr) : nlohmann::json(path.string())},
                         {"opaque_texels", opaque}});

@@ -268,6 +268,12 @@ TEST_F(AtlasBakeCli, PaintedShapeToGlbAndUdimPngsWithOneCommandEach) {
     EXPECT_TRUE(std::filesystem::exists(dir() / ("p." + std::to_string(1001 + t) + ".png")));
   }
   EXPECT_EQ(uv_tiles(read_mesh((dir() / "uv.obj").string())).size(), tiles);
+
+  // One tile: OUT as given, or with <UDIM> replaced by 1001.
+  r = limn(bake + "--atlas --size 128 -o " + q(dir() / "one.<UDIM>.png") + " --mesh-out " +
+           q(dir() / "one.obj"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(std::filesystem::exists(dir() / "one.1001.png"));
 }
 
 TEST_F(AtlasBakeCli, BadRequestsExitTwoAndWriteNothing) {
