@@ -67,6 +67,9 @@ void run(const BakeOpts& o, CLI::App* cmd) {
   }
   if (!o.mesh_out.empty() && !(png || glb))
     throw InputError("--mesh-out goes with a texture output (.png or .glb)");
+  const MeshFormat mesh_out_format = format_from_path(o.mesh_out);
+  if (!o.mesh_out.empty() && mesh_out_format == MeshFormat::automatic)
+    throw InputError(fmt::format("{}: cannot tell the mesh format from the extension", o.mesh_out));
   check_writable_folder(o.out, "output");
   if (!o.mesh_out.empty()) check_writable_folder(o.mesh_out, "--mesh-out");
   int w = o.size, h = o.size;
@@ -173,13 +176,9 @@ void run(const BakeOpts& o, CLI::App* cmd) {
     }
     nlohmann::json dropped = nlohmann::json::array();
     if (!o.mesh_out.empty()) {
-      const std::filesystem::path mesh_path(o.mesh_out);
-      const MeshFormat format = format_from_path(mesh_path);
-      if (format == MeshFormat::automatic)
-        throw InputError(
-            fmt::format("{}: cannot tell the mesh format from the extension", o.mesh_out));
-      for (const std::string& name : dropped_attributes(mesh, format)) dropped.push_back(name);
-      files.emplace_back(mesh_path, write_mesh_memory(mesh, format));
+      for (const std::string& name : dropped_attributes(mesh, mesh_out_format))
+        dropped.push_back(name);
+      files.emplace_back(o.mesh_out, write_mesh_memory(mesh, mesh_out_format));
     }
     write_files_atomic(files);
     if (!dropped.empty())

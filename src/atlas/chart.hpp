@@ -22,7 +22,9 @@ struct Chart {
   long euler = 0;                       ///< V - E + F; 1 for a disk
   double area = 0, normal_sum = 0;      ///< sum of face areas, |sum of vector areas|
   std::vector<double> uv;               ///< 2 per chart vertex once mapped
-  double fill = 0;  ///< once mapped and oriented: UV area over the area of the UVs' convex hull
+  /// Once kept (mapped, judged and oriented): UV area over the area of the UVs' convex hull, and
+  /// the map's Sander stretch (chart_quality).
+  double fill = 0, stretch_l2 = 0, stretch_linf = 0;
 };
 
 /// Shared scratch arrays for building charts from disjoint face sets on several threads at once:

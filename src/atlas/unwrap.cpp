@@ -57,21 +57,26 @@ struct Charter {
                 std::vector<uint32_t>(surface.mesh->corner_count(), kNone)} {}
 
   // The chart over `faces` with its map; false when the map is not good enough (a single face
-  // always is). Safe on several threads for disjoint face sets with distinct ids.
+  // always is). A kept chart is oriented for packing and holds its fill and stretch. Safe on
+  // several threads for disjoint face sets with distinct ids.
   bool try_chart(std::vector<uint32_t> faces, uint32_t id, atlas::Chart& ch) {
     ch = atlas::build_chart(s, std::move(faces), id, scratch);
+    atlas::ChartQuality q;
     if (ch.faces.size() == 1) {
       if (!atlas::conformal_map(s, ch)) atlas::planar_map(s, ch);
-      return true;
+      q = atlas::chart_quality(s, ch);
+    } else {
+      // Normals spread over more than a hemisphere on average cannot flatten well: no need to
+      // try.
+      if (ch.euler != 1 || ch.normal_sum < 0.5 * ch.area || !atlas::conformal_map(s, ch))
+        return false;
+      q = atlas::chart_quality(s, ch);
+      if (q.flipped != 0 || q.stretch_l2 > max_stretch || atlas::boundary_crosses(ch)) return false;
     }
-    // Normals spread over more than a hemisphere on average cannot flatten well: no need to try.
-    if (ch.euler != 1 || ch.normal_sum < 0.5 * ch.area || !atlas::conformal_map(s, ch))
-      return false;
-    const atlas::ChartQuality q = atlas::chart_quality(s, ch);
-    if (q.flipped != 0 || q.stretch_l2 > max_stretch || atlas::boundary_crosses(ch)) return false;
     const atlas::ChartExtent e = atlas::orient_chart(ch);
     ch.fill = e.hull_area > 0 ? ch.area / e.hull_area : 1;
-    return ch.fill >= kMinFill && e.width <= max_extent;
+    ch.stretch_l2 = q.stretch_l2, ch.stretch_linf = q.stretch_linf;
+    return ch.faces.size() == 1 || (ch.fill >= kMinFill && e.width <= max_extent);
   }
 
   // Charts over the face sets, each cut in two (along its sharpest feature) until its map is
@@ -221,17 +226,15 @@ UnwrapResult unwrap_mesh(const Mesh& mesh, const UnwrapOptions& o, std::string_v
   st.splits = charter.splits;
   double l2 = 0, area = 0;
   for (const atlas::Chart& ch : charts) {
-    const atlas::ChartQuality q = atlas::chart_quality(s, ch);
-    l2 += ch.area * q.stretch_l2 * q.stretch_l2;
+    l2 += ch.area * ch.stretch_l2 * ch.stretch_l2;
     area += ch.area;
-    st.stretch_linf = std::max(st.stretch_linf, q.stretch_linf);
+    st.stretch_linf = std::max(st.stretch_linf, ch.stretch_linf);
   }
   st.stretch_l2 = area > 0 ? std::sqrt(l2 / area) : 0;
   st.charts = charts.size();
   st.chart_ms = ms_since(t0);
 
   const auto t1 = std::chrono::steady_clock::now();
-  tbb::parallel_for(size_t(0), charts.size(), [&](size_t i) { atlas::orient_chart(charts[i]); });
   const atlas::PackOptions po{o.size, o.tiles, o.padding, o.texels_per_unit};
   const atlas::Packing pack = atlas::pack_charts(charts, po);
   if (!pack.fits) {

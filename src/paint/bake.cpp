@@ -44,6 +44,16 @@ void lookup(OctreeSampler& s, const OctreeTexture& t, const float p[3], const fl
   }
 }
 
+// The UDIM tile (0-99) holding the centre of the UV triangle over corners c, or -1 when the
+// centre lies outside u, v in [0, 10) or is not a number. Tiles own their lower and left edges.
+int uv_triangle_tile(const Mesh& mesh, const uint32_t c[3]) {
+  double centre[2] = {0, 0};
+  for (int i = 0; i < 3; ++i)
+    for (int a = 0; a < 2; ++a) centre[a] += mesh.uvs[2 * size_t(mesh.uv_indices[c[i]]) + a] / 3.0;
+  if (!(centre[0] >= 0 && centre[0] < 10 && centre[1] >= 0 && centre[1] < 10)) return -1;
+  return int(std::floor(centre[0])) + 10 * int(std::floor(centre[1]));
+}
+
 }  // namespace
 
 std::vector<float> bake_vertex_colors(const OctreeTexture& t, const Mesh& mesh,
@@ -81,17 +91,15 @@ Image bake_uv_texture(const OctreeTexture& t, const Mesh& mesh, int width, int h
   for (size_t f = 0; f < mesh.face_count(); ++f) {
     const uint32_t o = mesh.face_offsets[f], n = mesh.face_size(f);
     for (uint32_t k = 1; k + 1 < n; ++k) {
-      float uv[3][2];
       const uint32_t corner[3] = {o, o + k, o + k + 1};
+      if (uv_triangle_tile(mesh, corner) != opt.tile) continue;  // another tile's triangle
+      float uv[3][2];
       for (int i = 0; i < 3; ++i) {
         const size_t ui = mesh.uv_indices[corner[i]];
         // Texel space: x right, y down from the top row (v = 1).
         uv[i][0] = (mesh.uvs[2 * ui] - tile_u) * float(width);
         uv[i][1] = (1.0f - (mesh.uvs[2 * ui + 1] - tile_v)) * float(height);
       }
-      const float cu = (uv[0][0] + uv[1][0] + uv[2][0]) / (3 * float(width));
-      const float cv = (uv[0][1] + uv[1][1] + uv[2][1]) / (3 * float(height));
-      if (!(cu >= 0 && cu < 1 && cv > 0 && cv <= 1)) continue;  // another tile's triangle
       const float den = (uv[1][1] - uv[2][1]) * (uv[0][0] - uv[2][0]) +
                         (uv[2][0] - uv[1][0]) * (uv[0][1] - uv[2][1]);
       if (!(std::fabs(den) > 0) || !std::isfinite(den)) continue;
@@ -210,14 +218,12 @@ std::vector<int> uv_tiles(const Mesh& mesh, size_t* outside) {
   for (size_t f = 0; f < mesh.face_count(); ++f) {
     const uint32_t o = mesh.face_offsets[f], n = mesh.face_size(f);
     for (uint32_t k = 1; k + 1 < n; ++k) {
-      double c[2] = {0, 0};
-      for (uint32_t corner : {o, o + k, o + k + 1})
-        for (int a = 0; a < 2; ++a) c[a] += mesh.uvs[2 * size_t(mesh.uv_indices[corner]) + a] / 3.0;
-      if (!(c[0] >= 0 && c[0] < 10 && c[1] >= 0 && c[1] < 10)) {  // NaN too
+      const uint32_t corner[3] = {o, o + k, o + k + 1};
+      const int tile = uv_triangle_tile(mesh, corner);
+      if (tile < 0)
         ++lost;
-        continue;
-      }
-      used[size_t(std::floor(c[0]) + 10 * std::floor(c[1]))] = 1;
+      else
+        used[size_t(tile)] = 1;
     }
   }
   if (outside) *outside = lost;

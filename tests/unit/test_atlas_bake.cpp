@@ -306,6 +306,8 @@ TEST_F(AtlasBakeCli, BadRequestsExitTwoAndWriteNothing) {
            " --mesh-out " + q(dir() / "uv.obj"),
        "too dense"},
       {"--atlas -o " + q(dir() / "x.ply"), "must be .png or .glb"},
+      {"--atlas -o " + q(dir() / "x.png") + " --mesh-out " + q(dir() / "uv.xyz"),
+       "cannot tell the mesh format"},
       {"-o " + q(dir() / "x.png"), "--atlas"},
   };
   for (const auto& [args, message] : cases) {
