@@ -37,13 +37,26 @@ const limn::PaintSurface& sheet() {
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string_view in(reinterpret_cast<const char*>(data), size);
-  limn::OctreeTexture t;
+  limn::MaterialTexture m;
   try {
-    t = limn::parse_lot(in, "fuzz.lot", false);
+    m = limn::parse_lot(in, "fuzz.lot", false);
   } catch (const limn::InputError&) {
     return 0;
   }
+  const limn::OctreeTexture& t = m.color;
   if (!t.check().empty()) __builtin_trap();
+  if (m.rmh) {
+    if (!m.rmh->check().empty()) __builtin_trap();
+    // The material's lookups: RMH values over its defaults.
+    limn::OctreeSampler rs(*m.rmh);
+    for (size_t i = 0; i + 3 <= size && i < 3 * 32; i += 3) {
+      float p[3], rgba[4] = {0, 0, 0, 0};
+      for (int k = 0; k < 3; ++k)
+        p[k] = m.rmh->origin()[k] + float(data[i + size_t(k)]) / 255.0f * m.rmh->size();
+      rs.filtered(p, nullptr, 0.0f, rgba);
+      (void)limn::material_value(rgba, m.rmh->background());
+    }
+  }
   (void)t.stats();
   size_t samples = 0;
   t.for_each_sample([&](const limn::OctreeSample&) { ++samples; });
@@ -82,8 +95,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     if (!u.check().empty()) __builtin_trap();
   }
 
-  const std::string again = limn::serialize_lot(t);
-  const limn::OctreeTexture r = limn::parse_lot(again, "roundtrip.lot");  // must not throw
-  if (!(r == t)) __builtin_trap();
+  const std::string again = limn::serialize_lot(m);
+  const limn::MaterialTexture r = limn::parse_lot(again, "roundtrip.lot");  // must not throw
+  if (!(r == m)) __builtin_trap();
   return 0;
 }

@@ -227,20 +227,24 @@ void check_paint_depth(int depth, Names names) {
 }
 
 PaintOutcome paint(const Mesh& mesh, const StrokeScript& script, Rgba8 background,
-                   std::optional<OctreeTexture> start) {
+                   std::optional<MaterialTexture> start, const MaterialDefaults& defaults) {
+  rmh_background(defaults);  // checks them
   Stopwatch laps;
   const PaintSurface surface(mesh);
   const double t_surface = laps.lap();
-  PaintOutcome out{start ? std::move(*start) : OctreeTexture::create(surface, background), {}};
-  OctreeTexture& tex = out.texture;
+  PaintOutcome out{start ? std::move(*start)
+                         : MaterialTexture::from_color(OctreeTexture::create(surface, background)),
+                   {}};
+  MaterialTexture& tex = out.texture;
   const double t_create = laps.lap();
   PaintHistory history;
-  const ScriptResult r = run_strokes(tex, surface, script, history);
+  const ScriptResult r = run_strokes(tex, surface, script, history, defaults);
   const double t_paint = laps.lap();
   // Compact: no free blocks, each subtree in one stretch of the pool (the undo history ends
   // here anyway).
   history.clear();
-  tex.compact();
+  tex.color.compact();
+  if (tex.rmh) tex.rmh->compact();
   size_t dabs = 0, missed = 0, changed = 0, leaves = 0, bricks = 0, rays = 0, tasks = 0,
          threaded = 0;
   double stroke_ms = 0;
@@ -253,7 +257,10 @@ PaintOutcome paint(const Mesh& mesh, const StrokeScript& script, Rgba8 backgroun
   for (const PickResult& p : r.picks)
     picks.push_back({{"entry", p.command},
                      {"found", p.found},
-                     {"rgba", {p.rgba[0], p.rgba[1], p.rgba[2], p.rgba[3]}}});
+                     {"rgba", {p.rgba[0], p.rgba[1], p.rgba[2], p.rgba[3]}},
+                     {"roughness", p.channels[0]},
+                     {"metallic", p.channels[1]},
+                     {"height", p.channels[2]}});
   out.report = {
       {"entries", script.commands.size()},
       {"strokes", r.strokes.size()},
@@ -274,7 +281,7 @@ PaintOutcome paint(const Mesh& mesh, const StrokeScript& script, Rgba8 backgroun
       {"undos", r.undos},
       {"redos", r.redos},
       {"picks", picks},
-      {"texture", reports::texture_json(tex)},
+      {"texture", reports::material_json(tex)},
       {"timings_ms", {{"surface_bvh", t_surface}, {"texture", t_create}, {"paint", t_paint}}}};
   return out;
 }

@@ -70,7 +70,7 @@ UniformOutcome subdivide_uniform(const Mesh& cage, int level, bool limit, std::s
 /// `limn paint`: a stroke script run on `mesh` into `start` (continued) or a new texture with
 /// `background`. The texture comes back compact (free blocks dropped, the undo history ended).
 struct PaintOutcome {
-  OctreeTexture texture;
+  MaterialTexture texture;
   /// entries, strokes, dabs (missed), samples changed, leaves and bricks created, occlusion rays,
   /// ms per dab, threads, undos, redos, picks, the texture's stats, timings of the surface BVH,
   /// the texture and the painting
@@ -78,8 +78,10 @@ struct PaintOutcome {
 };
 /// InputError for a paint depth outside 1-octree::kMaxDepth.
 void check_paint_depth(int depth, Names names);
+/// Paints a new material (colour background `background`; RMH texture, when a channel is
+/// painted, at `defaults`) or continues `start`.
 PaintOutcome paint(const Mesh& mesh, const StrokeScript& script, Rgba8 background,
-                   std::optional<OctreeTexture> start);
+                   std::optional<MaterialTexture> start, const MaterialDefaults& defaults = {});
 
 /// `limn unwrap`'s options (its defaults; names as its flags).
 struct UnwrapJob {

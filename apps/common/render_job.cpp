@@ -16,10 +16,13 @@ nlohmann::json camera_json(const Camera& c) {
 
 namespace {
 
-DrawOptions draw_options(const MeshRender& o, const GpuOctreeTexture* texture) {
+DrawOptions draw_options(const MeshRender& o, const GpuOctreeTexture* texture,
+                         const GpuOctreeTexture* rmh) {
   DrawOptions d;
   d.outline = o.wireframe;
   d.texture = texture;
+  d.material = rmh;
+  d.height_scale = o.height_scale;
   d.texture_nearest = o.nearest;
   d.uv_checker = o.uv_checker;
   d.depth_colors = o.depth_colors;
@@ -39,13 +42,16 @@ RenderedImage render_with(const Mesh& mesh, const MeshRender& o, std::string_vie
   GlContext gl;
   std::optional<GpuOctreeTexture> gpu_texture;
   if (o.texture) gpu_texture.emplace(*o.texture);
+  std::optional<GpuOctreeTexture> gpu_rmh;
+  if (o.rmh) gpu_rmh.emplace(*o.rmh);
   RenderTarget target(o.width, o.height, o.samples);
   RenderedImage out;
   out.camera = view_camera(mesh, o.width, o.height, o.camera);
   auto drawer = make_drawer();
   target.begin(o.background);
-  const DrawStats st =
-      drawer.draw(out.camera, draw_options(o, gpu_texture ? &*gpu_texture : nullptr));
+  const DrawStats st = drawer.draw(
+      out.camera,
+      draw_options(o, gpu_texture ? &*gpu_texture : nullptr, gpu_rmh ? &*gpu_rmh : nullptr));
   out.rgba = target.read_rgba();
   out.report = {{"renderer", gl.renderer()},         {"resolution", {o.width, o.height}},
                 {"camera", camera_json(out.camera)}, {"drawn", st.patches},

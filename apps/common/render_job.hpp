@@ -22,6 +22,9 @@ struct MeshRender {
   float uv_checker = 0;                    ///< squares per UV unit; 0: off
   const OctreeTexture* texture = nullptr;  ///< colour from a painted texture
   bool nearest = false;                    ///< texture: nearest texel, not filtered
+  /// The painted material's RMH texture (null: none) and height scale: PBR shading and bumps.
+  const OctreeTexture* rmh = nullptr;
+  float height_scale = 0;
   // Patches only (render_patches):
   bool depth_colors = false;        ///< colour by refinement level
   float pixels_per_segment = 8.0f;  ///< screen-space tessellation, unless factor > 0

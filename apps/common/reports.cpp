@@ -84,6 +84,21 @@ nlohmann::json texture_json(const OctreeTexture& t) {
       {"cube", {{"origin", {t.origin()[0], t.origin()[1], t.origin()[2]}}, {"size", t.size()}}}};
 }
 
+nlohmann::json material_json(const MaterialTexture& m) {
+  nlohmann::json j = texture_json(m.color);
+  j["height_scale"] = m.height_scale;
+  if (!m.rmh) {
+    j["rmh"] = nullptr;
+    return j;
+  }
+  const MaterialDefaults d = m.defaults();
+  nlohmann::json r = texture_json(*m.rmh);
+  r.erase("cube");
+  r["defaults"] = {{"roughness", d.roughness}, {"metallic", d.metallic}, {"height", d.height}};
+  j["rmh"] = std::move(r);
+  return j;
+}
+
 nlohmann::json simplify_json(const Mesh& input, const VsaOptions& options, const VsaResult& r) {
   using nlohmann::json;
   const VsaStats& st = r.stats;

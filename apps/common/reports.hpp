@@ -6,7 +6,7 @@
 
 #include "limn/mesh/repair.hpp"
 #include "limn/mesh/topology.hpp"
-#include "limn/paint/texture.hpp"
+#include "limn/paint/material.hpp"
 #include "limn/simplify/distance.hpp"
 #include "limn/simplify/vsa.hpp"
 
@@ -17,6 +17,9 @@ nlohmann::json stats_json(const MeshStats& s);
 
 /// An octree texture's counts and sizes (`limn paint --stats`).
 nlohmann::json texture_json(const OctreeTexture& t);
+/// A material's: the colour texture's counts (texture_json), its height scale, and "rmh": the
+/// RMH texture's counts and defaults (null without one).
+nlohmann::json material_json(const MaterialTexture& m);
 
 /// The counts of a repair (`limn repair`, `--repair`).
 nlohmann::json repair_json(const RepairReport& r);

@@ -92,6 +92,7 @@ void Scene::release_gl() {
   dynamic_drawer_.reset();
   painted_drawer_.reset();
   gpu_texture_.reset();
+  gpu_rmh_.reset();
   clusters_drawer_.reset();
   simplified_drawer_.reset();
   fixed_depth_ = -1;
@@ -178,6 +179,7 @@ FrameStats Scene::draw(Display display, const Camera& camera, const SurfaceSetti
   FrameStats fs;
   DrawOptions o = options;
   o.texture = nullptr;
+  o.material = nullptr;
   if ((display == Display::clusters || display == Display::simplified) && !vsa_)
     display = Display::painted;
   switch (display) {
@@ -195,6 +197,8 @@ FrameStats Scene::draw(Display display, const Camera& camera, const SurfaceSetti
       // see kDenseTriangles for how close the two are).
       sync_gpu_texture();
       o.texture = gpu_texture_.get();
+      o.material = gpu_rmh_.get();
+      o.height_scale = texture_->height_scale;
       if (is_cage()) {
         draw_surface(camera, s, o, fs);
       } else {
@@ -243,9 +247,9 @@ const Mesh& Scene::dense_mesh() {
 
 void Scene::build_paint() {
   surface_ = std::make_unique<PaintSurface>(dense_mesh());
-  texture_ = std::make_unique<OctreeTexture>(
-      OctreeTexture::create(*surface_, pack_rgba8(214, 214, 220, 255)));
-  painter_ = std::make_unique<StrokePainter>(*texture_, *surface_, &history_);
+  texture_ = std::make_unique<MaterialTexture>(MaterialTexture::from_color(
+      OctreeTexture::create(*surface_, pack_rgba8(214, 214, 220, 255))));
+  painter_ = std::make_unique<MaterialPainter>(*texture_, *surface_, &history_);
 }
 
 void Scene::ensure_paint() {
@@ -260,14 +264,24 @@ void Scene::sync_gpu_texture() {
   if (gpu_texture_ && !gpu_dirty_) return;
   const auto t0 = std::chrono::steady_clock::now();
   if (!gpu_texture_) {
-    gpu_texture_ = std::make_unique<GpuOctreeTexture>(*texture_);
+    gpu_texture_ = std::make_unique<GpuOctreeTexture>(texture_->color);
   } else {
-    gpu_texture_->update(*texture_);
+    gpu_texture_->update(texture_->color);
+  }
+  size_t words = gpu_texture_->last_upload_words();
+  if (texture_->rmh) {
+    if (!gpu_rmh_)
+      gpu_rmh_ = std::make_unique<GpuOctreeTexture>(*texture_->rmh);
+    else
+      gpu_rmh_->update(*texture_->rmh);
+    words += gpu_rmh_->last_upload_words();
+  } else {
+    gpu_rmh_.reset();
   }
   gpu_dirty_ = false;
   stroke_times_.upload_ms += ms_since(t0);
   ++stroke_times_.uploads;
-  stroke_times_.upload_words += gpu_texture_->last_upload_words();
+  stroke_times_.upload_words += words;
 }
 
 void Scene::begin_stroke(const Brush& brush, const Camera& camera, bool replayable) {
@@ -304,7 +318,7 @@ StrokeStats Scene::replay_stroke() const {
   // With an undo record, as the viewer's own painter keeps one: the same work asked of the
   // library. Caches are emptied first: the viewer's stroke began after a frame had filled them
   // with other data, and a replay right after the stroke would find its data still there.
-  OctreeTexture copy = *before_stroke_;
+  MaterialTexture copy = *before_stroke_;
   {
     std::vector<uint8_t> flush(size_t(64) << 20);
     for (size_t i = 0; i < flush.size(); i += 64) flush[i] = uint8_t(i);
@@ -312,7 +326,7 @@ StrokeStats Scene::replay_stroke() const {
     (void)sink;
   }
   PaintHistory history;
-  StrokePainter painter(copy, *surface_, &history);
+  MaterialPainter painter(copy, *surface_, &history);
   painter.begin(stroke_brush_, &stroke_camera_);
   if (stroke_points_.size() == 2)
     painter.dab_screen(stroke_points_[0], stroke_points_[1]);
@@ -350,7 +364,7 @@ void Scene::save_texture(const std::filesystem::path& path) {
 void Scene::load_texture(const std::filesystem::path& path) {
   ensure_paint();
   if (stroking_) end_stroke();
-  OctreeTexture t = load_lot(path);
+  MaterialTexture t = load_lot(path);
   // The painter holds a reference to *texture_: replace the contents, not the object.
   *texture_ = std::move(t);
   history_.clear();

@@ -106,7 +106,7 @@ class Scene {
   /// Words in the texture's pool (0 before any painting) and words sent to the GPU by its last
   /// upload or update (0 before the first painted draw).
   size_t texture_words() const {
-    return !preparing_.valid() && texture_ ? texture_->words().size() : 0;
+    return !preparing_.valid() && texture_ ? texture_->bytes() / 4 : 0;
   }
   size_t texture_upload_words() const {
     return gpu_texture_ ? gpu_texture_->last_upload_words() : 0;
@@ -159,15 +159,16 @@ class Scene {
   // Paint.
   std::optional<Mesh> dense_;
   std::unique_ptr<PaintSurface> surface_;
-  std::unique_ptr<OctreeTexture> texture_;
+  std::unique_ptr<MaterialTexture> texture_;
   PaintHistory history_;
-  std::unique_ptr<StrokePainter> painter_;
+  std::unique_ptr<MaterialPainter> painter_;
   std::unique_ptr<GpuOctreeTexture> gpu_texture_;
+  std::unique_ptr<GpuOctreeTexture> gpu_rmh_;   // the material channels, once painted
   std::unique_ptr<MeshDrawer> painted_drawer_;  // scans: the mesh itself, smooth shaded
   bool stroking_ = false, gpu_dirty_ = true;
   std::future<void> preparing_;  // valid while the background preparation may be running
   StrokeTimes stroke_times_;
-  std::optional<OctreeTexture> before_stroke_;  // replayable strokes: the texture before
+  std::optional<MaterialTexture> before_stroke_;  // replayable strokes: the material before
   Brush stroke_brush_;
   PaintCamera stroke_camera_;
   std::vector<double> stroke_points_;

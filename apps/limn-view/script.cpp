@@ -86,6 +86,26 @@ void parse_stroke(Action& a, const json& v) {
     } else if (key == "live") {
       if (!value.is_boolean()) fail(a, "'live' must be true or false");
       a.live = value.get<bool>();
+    } else if (key == "paint_color") {
+      b.paint_color = boolean(a, value, "paint_color");
+    } else if (key == "roughness" || key == "metallic" || key == "height") {
+      // A material channel: its value (mixed in at opacity 1), or {"value", "blend", "opacity"}.
+      ChannelPaint& c = b.material[key == "roughness" ? 0 : key == "metallic" ? 1 : 2];
+      c.on = true;
+      if (value.is_object()) {
+        for (const auto& [k, x] : value.items()) {
+          if (k == "value")
+            c.value = float(number(a, x, (key + ".value").c_str(), 0, 1));
+          else if (k == "blend")
+            c.blend = parse_blend(text(a, x, (key + ".blend").c_str()), a.where);
+          else if (k == "opacity")
+            c.opacity = float(number(a, x, (key + ".opacity").c_str(), 0, 1));
+          else
+            fail(a, fmt::format("unknown {} key '{}'", key, k));
+        }
+      } else {
+        c.value = float(number(a, value, key.c_str(), 0, 1));
+      }
     } else {
       fail(a, fmt::format("unknown stroke key '{}'", key));
     }

@@ -1,6 +1,7 @@
 # The viewer's tests (ctest view_script, view_bad_input), run with cmake -P:
 #   MODE=script: limn-view runs tests/data/view_script.json under Xvfb (a dynamic-depth surface,
-#     fixed depth, the cage, a paint stroke, undo/redo, .lot save and load, a simplify run and
+#     fixed depth, the cage, a paint stroke, undo/redo, .lot save and load, a material stroke
+#     (metallic, rough, height: PBR-shaded), a simplify run and
 #     its export); its screenshots must not be blank and the stroke's colour must appear where
 #     it should (painted, redone with nearest texels, reloaded) and nowhere else (before,
 #     undone). Then --frames/--screenshot.
@@ -86,6 +87,8 @@ if(MODE STREQUAL "script")
   check(undone.png --absent 1,0,1)
   check(nearest.png --present 1,0,1 --min-pixels 500)
   check(reloaded.png --present 1,0,1 --min-pixels 500)
+  # A stroke carrying a material (metal, glossy, raised), drawn with the material shading.
+  check(material.png --present 0,1,0 --min-pixels 300)
   check(clusters.png)
   foreach(f view.lot simplified.obj)
     if(NOT EXISTS ${WORK_DIR}/${f})

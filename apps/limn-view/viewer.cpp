@@ -497,6 +497,26 @@ void Viewer::panel() {
     const char* blends[] = {"mix", "add", "multiply", "erase"};
     if (ImGui::Combo("blend", &blend_, blends, 4)) brush_.blend = BlendMode(blend_);
     ImGui::SliderInt("brush depth", &brush_.depth, 4, 14);
+    // The material the brush carries: each channel on or off, with its value, blend and opacity.
+    ImGui::Checkbox("paint colour", &brush_.paint_color);
+    for (int k = 0; k < kMaterialChannels; ++k) {
+      ChannelPaint& c = brush_.material[k];
+      ImGui::PushID(k);
+      ImGui::Checkbox(channel_name(MaterialChannel(k)), &c.on);
+      if (c.on) {
+        ImGui::SameLine();
+        ImGui::SetNextItemWidth(90);
+        ImGui::SliderFloat("##value", &c.value, 0.0f, 1.0f, "%.2f");
+        ImGui::SameLine();
+        ImGui::SetNextItemWidth(70);
+        int channel_blend = int(c.blend);
+        if (ImGui::Combo("##blend", &channel_blend, blends, 4)) c.blend = BlendMode(channel_blend);
+        ImGui::SameLine();
+        ImGui::SetNextItemWidth(70);
+        ImGui::SliderFloat("##opacity", &c.opacity, 0.0f, 1.0f, "%.2f");
+      }
+      ImGui::PopID();
+    }
     bool filtered = !draw_.texture_nearest;
     if (ImGui::Checkbox("filtered", &filtered)) draw_.texture_nearest = !filtered;
     if (ImGui::Button("Undo")) scene_.undo();

@@ -20,6 +20,8 @@ namespace {
 
 struct BakeOpts {
   std::string texture, mesh, out, format, resolution, mesh_out;
+  std::string mr_out, height_out, normal_out;  // channel images beside a PNG output
+  bool normal_map = false;                     // a GLB's normalTexture
   int size = 1024, gutter = 8;
   bool nearest = false, json = false, weld = false, atlas = false;
   jobs::UnwrapJob unwrap;
@@ -67,6 +69,19 @@ void run(const BakeOpts& o, CLI::App* cmd) {
   }
   if (!o.mesh_out.empty() && !(png || glb))
     throw InputError("--mesh-out goes with a texture output (.png or .glb)");
+  const std::pair<const char*, const std::string*> channel_outs[] = {
+      {"--metallic-roughness", &o.mr_out},
+      {"--height", &o.height_out},
+      {"--normal", &o.normal_out}};
+  for (auto [flag, path] : channel_outs) {
+    if (path->empty()) continue;
+    if (!png) throw InputError(fmt::format("{} goes with a .png output", flag));
+    if (lower_extension(*path) != ".png")
+      throw InputError(fmt::format("{} {}: must be a .png file", flag, *path));
+    check_writable_folder(*path, flag);
+  }
+  if (o.normal_map && !glb)
+    throw InputError("--normal-map goes with a .glb output (with a .png output: --normal FILE)");
   const MeshFormat mesh_out_format = format_from_path(o.mesh_out);
   if (!o.mesh_out.empty() && mesh_out_format == MeshFormat::automatic)
     throw InputError(fmt::format("{}: cannot tell the mesh format from the extension", o.mesh_out));
@@ -95,7 +110,8 @@ void run(const BakeOpts& o, CLI::App* cmd) {
   if (o.atlas) jobs::check(unwrap, jobs::Names::cli);
 
   Stopwatch sw;
-  const OctreeTexture tex = load_lot(o.texture);
+  const MaterialTexture material = load_lot(o.texture);
+  const OctreeTexture& tex = material.color;
   const double t_tex = sw.lap();
   nlohmann::json repaired;
   Mesh mesh = read_input(o.mesh, o.format, o.weld, o.repair, repaired);
@@ -116,6 +132,16 @@ void run(const BakeOpts& o, CLI::App* cmd) {
         "vertex colours",
         o.mesh));
   check_texture_fits(tex, mesh, o.texture, o.mesh);
+  // The material channels the outputs asked for cannot hold (height: a GLB holds it as its
+  // normal map).
+  std::vector<std::string> dropped_channels;
+  if (material.rmh) {
+    const bool mr = glb ? textured : !o.mr_out.empty();
+    const bool height = png ? !o.height_out.empty() : glb && textured && o.normal_map;
+    if (!mr) dropped_channels.insert(dropped_channels.end(), {"roughness", "metallic"});
+    if (!height) dropped_channels.push_back("height");
+  }
+  nlohmann::json dropped = dropped_channels;
   if (!textured) {
     mesh.colors = bake_vertex_colors(tex, mesh, bo);
     timings["bake"] = sw.lap();
@@ -132,6 +158,7 @@ void run(const BakeOpts& o, CLI::App* cmd) {
     j["mode"] = "vertex";
     j["vertices"] = mesh.vertex_count();
     j["painted_vertices"] = painted;
+    j["dropped"] = dropped;
   } else {
     if (o.atlas) {
       jobs::UnwrapOutcome u = jobs::unwrap(mesh, unwrap, o.mesh);
@@ -154,36 +181,81 @@ void run(const BakeOpts& o, CLI::App* cmd) {
     // Everything is baked and encoded first, then written all at once (or not at all).
     std::vector<std::pair<std::filesystem::path, std::string>> files;
     nlohmann::json images = nlohmann::json::array();
+    const bool normals = glb ? o.normal_map : !o.normal_out.empty();
+    GlbTextures glb_material;
+    const MaterialDefaults defaults = material.defaults();
+    glb_material.roughness = defaults.roughness, glb_material.metallic = defaults.metallic;
     for (int tile : tiles) {
       bo.tile = tile;
-      const Image img = bake_uv_texture(tex, mesh, w, h, o.gutter, bo);
+      MaterialImages img = bake_material(material, mesh, w, h, o.gutter, bo, normals);
       size_t opaque = 0;
-      for (size_t i = 3; i < img.rgba.size(); i += 4) opaque += img.rgba[i] != 0;
-      // One tile keeps OUT as given, unless OUT names the tile with <UDIM>.
-      const bool as_given = glb || (tiles == std::vector<int>{0} && !names_tile(o.out));
-      const std::filesystem::path path = as_given ? out : tile_path(o.out, tile);
-      images.push_back({{"udim", 1001 + tile},
-                        {"file", glb ? nlohmann::json(nullptr) : nlohmann::json(path.string())},
-                        {"opaque_texels", opaque}});
-      files.emplace_back(path, encode_png(img));
+      for (size_t i = 3; i < img.base_color.rgba.size(); i += 4)
+        opaque += img.base_color.rgba[i] != 0;
+      // One tile keeps each output's name as given, unless it names the tile with <UDIM>.
+      auto path_of = [&](const std::string& name) {
+        const bool as_given = tiles == std::vector<int>{0} && !names_tile(name);
+        return as_given ? std::filesystem::path(name) : tile_path(name, tile);
+      };
+      nlohmann::json entry = {{"udim", 1001 + tile}, {"opaque_texels", opaque}};
+      if (glb) {
+        glb_material.base_color_png = encode_png(img.base_color);
+        if (material.rmh) {
+          glb_material.metallic_roughness_png = encode_png(img.metallic_roughness);
+          // The texture's values are multiplied by the factors: 1 keeps them.
+          glb_material.roughness = glb_material.metallic = 1;
+        }
+        if (normals) glb_material.normal_png = encode_png(img.normal);
+        entry["file"] = nullptr;
+      } else {
+        const std::filesystem::path path = path_of(o.out);
+        entry["file"] = path.string();
+        files.emplace_back(path, encode_png(img.base_color));
+        if (!o.mr_out.empty()) {
+          // Without an RMH texture the defaults fill the image.
+          if (img.metallic_roughness.rgba.empty()) {
+            img.metallic_roughness = img.base_color;
+            for (size_t i = 0; i < img.metallic_roughness.rgba.size(); i += 4) {
+              uint8_t* px = &img.metallic_roughness.rgba[i];
+              px[0] = 255, px[3] = 255;
+              px[1] = uint8_t(std::lround(defaults.roughness * 255));
+              px[2] = uint8_t(std::lround(defaults.metallic * 255));
+            }
+          }
+          entry["metallic_roughness"] = path_of(o.mr_out).string();
+          files.emplace_back(path_of(o.mr_out), encode_png(img.metallic_roughness));
+        }
+        if (!o.height_out.empty()) {
+          if (img.height.values.empty()) {
+            img.height.width = w, img.height.height = h;
+            img.height.values.assign(size_t(w) * size_t(h),
+                                     uint16_t(std::lround(defaults.height * 65535)));
+          }
+          entry["height"] = path_of(o.height_out).string();
+          files.emplace_back(path_of(o.height_out), encode_png16(img.height));
+        }
+        if (normals) {
+          entry["normal"] = path_of(o.normal_out).string();
+          files.emplace_back(path_of(o.normal_out), encode_png(img.normal));
+        }
+      }
+      images.push_back(entry);
     }
     timings["bake"] = sw.lap();
     if (glb) {
-      GlbTextures material;
-      material.base_color_png = std::move(files.front().second);
-      files.front().second.clear();
-      write_glb(mesh, material, files.front().second);
+      files.emplace_back(out, std::string());
+      write_glb(mesh, glb_material, files.back().second);
     }
-    nlohmann::json dropped = nlohmann::json::array();
     if (!o.mesh_out.empty()) {
       for (const std::string& name : dropped_attributes(mesh, mesh_out_format))
         dropped.push_back(name);
       files.emplace_back(o.mesh_out, write_mesh_memory(mesh, mesh_out_format));
     }
     write_files_atomic(files);
-    if (!dropped.empty())
-      fmt::print(stderr, "limn: warning: {}: dropped {}\n", o.mesh_out,
-                 fmt::join(dropped.get<std::vector<std::string>>(), ", "));
+    const auto names = dropped.get<std::vector<std::string>>();
+    if (names.size() > dropped_channels.size())
+      fmt::print(
+          stderr, "limn: warning: {}: dropped {}\n", o.mesh_out,
+          fmt::join(names.begin() + std::ptrdiff_t(dropped_channels.size()), names.end(), ", "));
     j["mode"] = glb ? "glb" : "uv";
     size_t opaque = 0;
     for (const auto& t : images) opaque += t["opaque_texels"].get<size_t>();
@@ -192,6 +264,12 @@ void run(const BakeOpts& o, CLI::App* cmd) {
     j["mesh_out"] = o.mesh_out.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.mesh_out);
     j["dropped"] = dropped;
   }
+  if (!dropped_channels.empty())
+    fmt::print(stderr,
+               "limn: warning: {}: dropped {}: {} cannot hold {} (PNG: --metallic-roughness, "
+               "--height; GLB: --normal-map)\n",
+               o.texture, fmt::join(dropped_channels, ", "), o.out,
+               dropped_channels.size() == 1 ? "it" : "them");
   timings["write"] = sw.lap();
   timings["total"] = sw.ms();
   j["timings_ms"] = timings;
@@ -238,6 +316,17 @@ void add_bake(CLI::App& app) {
   cmd->add_option("--padding", o->unwrap.padding, "--atlas: free texels around every chart (2)");
   cmd->add_option("--max-stretch", o->unwrap.max_stretch,
                   "--atlas: largest Sander L2 stretch a chart keeps (1.003)");
+  cmd->add_option("--metallic-roughness", o->mr_out,
+                  "With a .png output: also bake roughness (green) and metalness (blue), as glTF "
+                  "packs them, into this PNG (UDIM names as for -o)");
+  cmd->add_option("--height", o->height_out,
+                  "With a .png output: also bake height into this 16-bit greyscale PNG");
+  cmd->add_option("--normal", o->normal_out,
+                  "With a .png output: also bake a tangent-space normal map of the height into "
+                  "this PNG (OpenGL convention, +Y along +v)");
+  cmd->add_flag("--normal-map", o->normal_map,
+                "With a .glb output: add a normal map of the height as the material's "
+                "normalTexture");
   cmd->add_flag("--nearest", o->nearest, "Nearest lookups instead of trilinear");
   cmd->add_option("--format", o->format, "Mesh format, overriding the extension");
   cmd->add_flag("--json", o->json, "Print one JSON object");

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <optional>
 #include <sstream>
 
 #include "../common/jobs.hpp"
@@ -18,6 +19,8 @@ namespace {
 
 struct PaintOpts {
   std::string mesh, strokes, out, texture, stats, background = "0,0,0,0", format;
+  std::string channel_defaults;
+  std::optional<double> height_scale;
   int depth = 10;
   bool json = false, weld = false;
   RepairFlags repair;
@@ -36,9 +39,9 @@ Rgba8 parse_color(const std::string& s, const char* option) {
 
 void run_stats(const PaintOpts& o) {
   Stopwatch sw;
-  const OctreeTexture t = load_lot(o.stats);
+  const MaterialTexture t = load_lot(o.stats);
   const double t_read = sw.lap();
-  nlohmann::json j = texture_json(t);
+  nlohmann::json j = material_json(t);
   j["file"] = o.stats;
   j["timings_ms"] = {{"read", t_read}, {"total", sw.ms()}};
   if (o.json) {
@@ -66,10 +69,30 @@ void run_paint(const PaintOpts& o) {
   const double t_read = sw.lap();
   const StrokeScript script = read_strokes(o.strokes, o.depth);
   const double t_parse = sw.lap();
-  std::optional<OctreeTexture> start;
+  std::optional<MaterialTexture> start;
   if (!o.texture.empty()) start = load_lot(o.texture);
-  jobs::PaintOutcome painted = jobs::paint(mesh, script, background, std::move(start));
-  const OctreeTexture& tex = painted.texture;
+  MaterialDefaults defaults;
+  if (!o.channel_defaults.empty()) {
+    const std::vector<float> v = parse_numbers(o.channel_defaults, "--channel-defaults");
+    if (v.size() != 3)
+      throw InputError(
+          fmt::format("--channel-defaults {}: expected roughness,metallic,height in [0, 1]",
+                      o.channel_defaults));
+    defaults = {v[0], v[1], v[2]};
+    try {
+      rmh_background(defaults);
+    } catch (const InputError& e) {
+      throw InputError(fmt::format("--channel-defaults {}: {}", o.channel_defaults, e.what()));
+    }
+    if (start && start->rmh)
+      throw InputError(fmt::format(
+          "--channel-defaults: {} already has material channels with their defaults", o.texture));
+  }
+  if (o.height_scale && !(*o.height_scale > 0 && std::isfinite(*o.height_scale)))
+    throw InputError(fmt::format("--height-scale {}: must be a positive number", *o.height_scale));
+  jobs::PaintOutcome painted = jobs::paint(mesh, script, background, std::move(start), defaults);
+  if (o.height_scale) painted.texture.height_scale = float(*o.height_scale);
+  const MaterialTexture& tex = painted.texture;
   sw.lap();
   save_lot(tex, o.out);
   const double t_save = sw.lap();
@@ -87,13 +110,15 @@ void run_paint(const PaintOpts& o) {
     j["timings_ms"]["total"] = sw.ms();
     fmt::print("{}\n", j.dump(2));
   } else {
-    const OctreeTextureStats st = tex.stats();
+    const OctreeTextureStats st = tex.color.stats();
     fmt::print(
         "{} -> {}: {} strokes, {} dabs ({} missed the surface), {} samples changed; texture max "
-        "depth {}, {} leaves, {} bytes ({:.2f} per painted texel); {:.0f} ms in all\n",
+        "depth {}, {} leaves, {} bytes ({:.2f} per painted texel){}; {:.0f} ms in all\n",
         o.mesh, o.out, report["strokes"].get<size_t>(), report["dabs"].get<size_t>(),
         report["dabs_missed"].get<size_t>(), report["samples_changed"].get<size_t>(), st.max_depth,
-        st.leaf_cells, st.bytes, st.bytes_per_painted_texel, sw.ms());
+        st.leaf_cells, st.bytes, st.bytes_per_painted_texel,
+        tex.rmh ? fmt::format("; material channels {} bytes", tex.rmh->stats().bytes) : "",
+        sw.ms());
   }
 }
 
@@ -114,6 +139,12 @@ void add_paint(CLI::App& app) {
   cmd->add_option("--texture", o->texture, "Continue painting this texture instead of a new one");
   cmd->add_option("--background", o->background,
                   "Colour of unpainted surface in a new texture, r,g,b[,a] (default 0,0,0,0)");
+  cmd->add_option("--channel-defaults", o->channel_defaults,
+                  "Roughness, metallic and height where they are not painted, when the material "
+                  "channels are first painted: r,m,h in [0, 1] (default 0.5,0,0.5)");
+  cmd->add_option("--height-scale", o->height_scale,
+                  "Model units that height 1 stands for (bump shading, normal maps; default 2% "
+                  "of the texture's cube, or what --texture holds)");
   cmd->add_option("--format", o->format, "Mesh format, overriding the extension");
   cmd->add_option("--stats", o->stats, "Print the counts and sizes of this texture instead");
   cmd->add_flag("--json", o->json, "Print one JSON object");

@@ -14,6 +14,7 @@
 namespace limn::cli {
 
 using jobs::Stopwatch;
+using reports::material_json;
 using reports::repair_json;
 using reports::stats_json;
 using reports::texture_json;

@@ -16,14 +16,16 @@ LIMN_GL_ENTRY void limn_cli_render(const RenderJob& job) {
   const int w = job.width, h = job.height;
   Stopwatch sw;
   const Mesh mesh = read_input(job.mesh, job.format, job.weld);
-  std::optional<OctreeTexture> texture;
+  std::optional<MaterialTexture> texture;
   if (!job.texture.empty()) texture = load_lot(job.texture);
   nlohmann::json timings = {{"read", sw.lap()}};
   jobs::MeshRender r;
   r.width = w, r.height = h, r.samples = job.samples;
   std::copy(job.clear_color, job.clear_color + 4, r.background);
   r.flat = job.flat, r.wireframe = job.wireframe, r.uv_checker = job.uv_checker;
-  r.texture = texture ? &*texture : nullptr;
+  r.texture = texture ? &texture->color : nullptr;
+  r.rmh = texture && texture->rmh ? &*texture->rmh : nullptr;
+  r.height_scale = texture ? texture->height_scale : 0.0f;
   r.nearest = job.nearest;
   jobs::RenderedImage image;
   if (job.adaptive) {

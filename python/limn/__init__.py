@@ -42,8 +42,10 @@ __all__ = [
     "SubdivideResult",
     "Texture",
     "UnwrapResult",
+    "BakedMaterial",
     "__version__",
     "bake",
+    "bake_material",
     "info",
     "load_texture",
     "paint",
@@ -321,8 +323,13 @@ def render(mesh: Mesh, *, resolution: tuple[int, int] | str = (1280, 720),
 
 
 def write_png(path: str | os.PathLike, image: np.ndarray) -> None:
-    """Writes an (h, w, 4) uint8 RGBA image as a PNG, atomically."""
-    _limn._write_png(os.fspath(path), image)
+    """Writes an (h, w, 4) uint8 RGBA image as a PNG, atomically; an (h, w) uint16 image (a
+    baked height) as a 16-bit greyscale PNG."""
+    image = np.asarray(image)
+    if image.ndim == 2 and image.dtype == np.uint16:
+        _limn._write_png16(os.fspath(path), image)
+    else:
+        _limn._write_png(os.fspath(path), image)
 
 
 @dataclasses.dataclass
@@ -368,14 +375,18 @@ Painter.run = _painter_run
 
 
 def paint(mesh: Mesh, strokes, *, depth: int = 10, texture: Optional[Texture] = None,
-          background=(0.0, 0.0, 0.0, 0.0)) -> PaintResult:
+          background=(0.0, 0.0, 0.0, 0.0), channel_defaults=(0.5, 0.0, 0.5),
+          height_scale: Optional[float] = None) -> PaintResult:
     """``limn paint``: runs a stroke script on ``mesh`` into a new octree texture (or a copy of
     ``texture``, continued).
 
     strokes: the script as docs/paint-strokes.md describes it: a dict (``{"strokes": [...]}``,
     numpy arrays allowed for points), its JSON text, or the path of a JSON file. depth: the leaf
     level of entries that give none (1-16; 10 is 1024^3 over the mesh's bounding cube).
-    background: RGB(A) in [0, 1] of unpainted surface in a new texture.
+    background: RGB(A) in [0, 1] of unpainted surface in a new texture. Entries may paint
+    material channels (``"roughness"``, ``"metallic"``, ``"height"``); channel_defaults:
+    (roughness, metallic, height) where they are not painted, when first painted.
+    height_scale: model units of height 1 (default: 2% of the texture's cube, or the texture's).
     """
     name, text = _script_text(strokes)
     bg = [float(c) for c in background]
@@ -383,7 +394,12 @@ def paint(mesh: Mesh, strokes, *, depth: int = 10, texture: Optional[Texture] = 
         bg.append(1.0)
     if len(bg) != 4:
         raise InputError(f"background {background}: expected r,g,b[,a] in [0, 1]")
-    out, stats = _limn._paint(mesh, text, name, int(depth), bg, texture)
+    defaults = [float(c) for c in channel_defaults]
+    if len(defaults) != 3:
+        raise InputError(f"channel_defaults {channel_defaults}: expected (roughness, metallic, "
+                         "height) in [0, 1]")
+    out, stats = _limn._paint(mesh, text, name, int(depth), bg, texture, defaults,
+                              None if height_scale is None else float(height_scale))
     return PaintResult(out, stats)
 
 
@@ -401,14 +417,53 @@ def bake(texture: Texture, mesh: Mesh, *, uv: bool = False, size: int = 1024,
         return _limn._bake_vertex_colors(texture, mesh, nearest)
     width, height = resolution if resolution is not None else (size, size)
     return _limn._bake_uv_image(texture, mesh, int(width), int(height), int(gutter), nearest,
-                                int(udim))
+                                int(udim), False)["base_color"]
+
+
+@dataclasses.dataclass
+class BakedMaterial:
+    """A material baked into one UV tile (:func:`bake_material`). Images are numpy arrays, rows
+    top to bottom; None where the texture has nothing to bake. ``metallic`` and ``roughness`` are
+    the factors a glTF material multiplies the metallic-roughness texture by (1 with the
+    texture; the channel defaults without one)."""
+    base_color: np.ndarray                      # (h, w, 4) uint8, sRGB
+    metallic_roughness: Optional[np.ndarray]    # (h, w, 4) uint8: G roughness, B metalness
+    height: Optional[np.ndarray]                # (h, w) uint16
+    normal: Optional[np.ndarray]                # (h, w, 4) uint8, tangent space, +Y along +v
+    metallic: float
+    roughness: float
+
+
+def bake_material(texture: Texture, mesh: Mesh, *, size: int = 1024,
+                  resolution: Optional[tuple[int, int]] = None, gutter: int = 8,
+                  nearest: bool = False, udim: int = 1001,
+                  normal_map: bool = False) -> BakedMaterial:
+    """``limn bake`` of every material channel into the mesh's UVs (as :func:`bake` with
+    ``uv=True``): base colour; roughness and metalness packed as glTF wants them and height as
+    16 bits, when the texture has channels; with ``normal_map`` a tangent-space normal map of
+    the height (height_scale model units per unit). Write them with :func:`write_png` and
+    :func:`write_glb`."""
+    width, height = resolution if resolution is not None else (size, size)
+    images = _limn._bake_uv_image(texture, mesh, int(width), int(height), int(gutter), nearest,
+                                  int(udim), bool(normal_map))
+    if images["metallic_roughness"] is not None:
+        metallic = roughness = 1.0
+    else:
+        roughness, metallic, _ = texture.channel_defaults
+    return BakedMaterial(images["base_color"], images["metallic_roughness"], images["height"],
+                         images["normal"], float(metallic), float(roughness))
 
 
 def write_glb(mesh: Mesh, path: str | os.PathLike, *, base_color: Optional[np.ndarray] = None,
-              metallic: float = 0.0, roughness: float = 1.0) -> None:
+              metallic_roughness: Optional[np.ndarray] = None,
+              normal: Optional[np.ndarray] = None, metallic: float = 0.0,
+              roughness: float = 1.0) -> None:
     """Writes ``mesh`` as a GLB, atomically, with a pbrMetallicRoughness material: ``base_color``
-    an (h, w, 4) uint8 image (sRGB, e.g. from :func:`bake` with ``uv=True``) embedded as a PNG
-    and mapped by the mesh's UVs (TEXCOORD_0); ``metallic`` and ``roughness`` its factors. As
-    ``limn bake TEXTURE MESH -o asset.glb``.
+    an (h, w, 4) uint8 image (sRGB, e.g. from :func:`bake` with ``uv=True``),
+    ``metallic_roughness`` (G roughness, B metalness) and ``normal`` (the material's
+    normalTexture), each embedded as a PNG and mapped by the mesh's UVs (TEXCOORD_0);
+    ``metallic`` and ``roughness`` its factors. As ``limn bake TEXTURE MESH -o asset.glb``; a
+    :class:`BakedMaterial` gives all of them.
     """
-    _limn._write_glb(mesh, os.fspath(path), base_color, float(metallic), float(roughness))
+    _limn._write_glb(mesh, os.fspath(path), base_color, metallic_roughness, normal,
+                     float(metallic), float(roughness))

@@ -7,9 +7,11 @@ The manifest holds one asset per line (JSON)::
 
 Steps run in order on the asset's mesh, each with the keyword arguments of the function of the
 same name (:func:`limn.repair`, :func:`limn.simplify`, :func:`limn.subdivide`, :func:`limn.paint`
-with ``strokes`` a script file, and ``bake``). A step may save its own result with ``"output"``
-(a mesh, the ``.lot`` of a paint step, the ``.png`` or vertex-coloured mesh of a bake step); the
-asset's final mesh goes to the line's ``"output"``. Relative paths are relative to the manifest.
+with ``strokes`` a script file, and ``bake``: with ``uv`` true and a ``.glb`` output every
+material channel goes into the GLB's material, ``normal_map`` adding a normal map of the height).
+A step may save its own result with ``"output"`` (a mesh, the ``.lot`` of a paint step, the
+``.png``, ``.glb`` or vertex-coloured mesh of a bake step); the asset's final mesh goes to the
+line's ``"output"``. Relative paths are relative to the manifest.
 
 Each asset is one task: a failing asset reports its error and the others go on. Results go to a
 JSON-lines file (one line per asset as it finishes: name, status ``done``/``skipped``/``failed``,
@@ -159,11 +161,22 @@ def run_asset(asset: dict[str, Any], force: bool = False) -> dict[str, Any]:
             elif job == "bake":
                 if texture is None:
                     raise limn.InputError("bake: no texture (a paint step must come first)")
+                glb = bool(output) and str(output).lower().endswith(".glb")
+                if options.get("uv") and glb:
+                    # Every material channel the texture has goes into the GLB's material.
+                    options.pop("uv")
+                    m = limn.bake_material(texture, mesh, **options)
+                    limn.write_glb(mesh, output, base_color=m.base_color,
+                                   metallic_roughness=m.metallic_roughness, normal=m.normal,
+                                   metallic=m.metallic, roughness=m.roughness)
+                    result["stats"].append({"job": job})
+                    result["outputs"].append(output)
+                    continue
+                if options.pop("normal_map", False):
+                    raise limn.InputError("bake: normal_map goes with uv=True and a .glb output")
                 baked = limn.bake(texture, mesh, **options)
                 if output:
-                    if options.get("uv") and str(output).lower().endswith(".glb"):
-                        limn.write_glb(mesh, output, base_color=baked)
-                    elif options.get("uv"):
+                    if options.get("uv"):
                         limn.write_png(output, baked)
                     else:
                         colored = mesh.copy()

@@ -12,7 +12,7 @@
 #include "arrays.hpp"
 #include "bindings.hpp"
 #include "jobs.hpp"
-#include "limn/paint/texture.hpp"
+#include "limn/paint/material.hpp"
 #include "limn/subdiv/depth.hpp"
 #include "limn/subdiv/patches.hpp"
 #include "limn/subdiv/refine.hpp"
@@ -139,7 +139,7 @@ extraordinary vertices isolated to their depth. Evaluates the limit surface exac
           "_render",
           [](const Patches& p, int width, int height, int samples, std::array<float, 4> background,
              std::optional<std::array<float, 7>> camera, bool wireframe, bool depth_colors,
-             int tess, float tess_px, const OctreeTexture* texture, bool nearest) {
+             int tess, float tess_px, const MaterialTexture* texture, bool nearest) {
             check_image(width, height, samples);
             if (tess < 0 || tess > 32) throw InputError(fmt::format("tess {}: must be 1-32", tess));
             if (!(tess_px > 0 && std::isfinite(tess_px)))
@@ -151,7 +151,9 @@ extraordinary vertices isolated to their depth. Evaluates the limit surface exac
             r.camera = camera_arg(camera);
             r.wireframe = wireframe, r.depth_colors = depth_colors;
             r.factor = tess, r.pixels_per_segment = tess_px;
-            r.texture = texture, r.nearest = nearest;
+            r.texture = texture ? &texture->color : nullptr, r.nearest = nearest;
+            r.rmh = texture && texture->rmh ? &*texture->rmh : nullptr;
+            r.height_scale = texture ? texture->height_scale : 0.0f;
             jobs::RenderedImage image;
             {
               py::gil_scoped_release unlocked;

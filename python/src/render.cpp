@@ -39,7 +39,7 @@ void bind_render(py::module_& m) {
       "_render_mesh",
       [](const Mesh& mesh, int width, int height, int samples, std::array<float, 4> background,
          std::optional<std::array<float, 7>> camera, bool flat, bool wireframe, float uv_checker,
-         const OctreeTexture* texture, bool nearest) {
+         const MaterialTexture* texture, bool nearest) {
         check_image(width, height, samples);
         if (!(uv_checker >= 0 && uv_checker <= 1024))
           throw InputError(fmt::format("uv_checker {}: squares per UV unit, 0-1024", uv_checker));
@@ -48,7 +48,9 @@ void bind_render(py::module_& m) {
         std::copy(background.begin(), background.end(), r.background);
         r.camera = camera_arg(camera);
         r.flat = flat, r.wireframe = wireframe, r.uv_checker = uv_checker;
-        r.texture = texture, r.nearest = nearest;
+        r.texture = texture ? &texture->color : nullptr, r.nearest = nearest;
+        r.rmh = texture && texture->rmh ? &*texture->rmh : nullptr;
+        r.height_scale = texture ? texture->height_scale : 0.0f;
         jobs::RenderedImage image;
         {
           py::gil_scoped_release unlocked;

@@ -154,7 +154,13 @@ def test_atlas_bakes_equal_the_cli(tmp_path, cli):
     atlas = limn.unwrap(torus, size=256)
     assert limn.udim_tiles(atlas.mesh) == [1001]
     image = limn.bake(texture, atlas.mesh, uv=True, size=256)
-    limn.write_glb(atlas.mesh, tmp_path / "py.glb", base_color=image)
+    baked = limn.bake_material(texture, atlas.mesh, size=256)
+    assert np.array_equal(baked.base_color, image)
+    assert baked.metallic_roughness is None and baked.height is None and baked.normal is None
+    # No channel painted: the defaults are the material's factors.
+    assert (baked.roughness, baked.metallic) == (0.5, 0.0)
+    limn.write_glb(atlas.mesh, tmp_path / "py.glb", base_color=image, metallic=baked.metallic,
+                   roughness=baked.roughness)
     assert (tmp_path / "py.glb").read_bytes() == (tmp_path / "cli.glb").read_bytes()
     assert report["mode"] == "glb" and report["atlas"]["charts"] == atlas.stats["charts"]
     back = limn.read_mesh(tmp_path / "py.glb")

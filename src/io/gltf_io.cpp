@@ -38,6 +38,56 @@ int add_accessor(tinygltf::Model& model, int view, int component, int type, size
   return static_cast<int>(model.accessors.size() - 1);
 }
 
+// Per vertex the tangent frame a normal map baked by limn assumes (limn/paint/bake.hpp): xyz
+// along +u (the area-weighted mean of the triangles' dP/du, made orthogonal to the normal), w
+// the handedness that makes cross(normal, xyz) * w point along +v (v up, as limn's UVs), as
+// glTF's TANGENT holds it. Vertices with no usable UV gradient get any unit tangent.
+std::vector<float> tangents(const std::vector<float>& pos, const std::vector<float>& nrm,
+                            const std::vector<float>& uvs, const std::vector<uint32_t>& tris) {
+  const size_t n = pos.size() / 3;
+  std::vector<double> t(3 * n, 0.0), b(3 * n, 0.0);
+  for (size_t i = 0; i + 2 < tris.size(); i += 3) {
+    const uint32_t v[3] = {tris[i], tris[i + 1], tris[i + 2]};
+    double e1[3], e2[3];
+    for (int k = 0; k < 3; ++k)
+      e1[k] = double(pos[3 * v[1] + k]) - pos[3 * v[0] + k],
+      e2[k] = double(pos[3 * v[2] + k]) - pos[3 * v[0] + k];
+    const double du1 = double(uvs[2 * v[1]]) - uvs[2 * v[0]],
+                 dv1 = double(uvs[2 * v[1] + 1]) - uvs[2 * v[0] + 1];
+    const double du2 = double(uvs[2 * v[2]]) - uvs[2 * v[0]],
+                 dv2 = double(uvs[2 * v[2] + 1]) - uvs[2 * v[0] + 1];
+    const double det = du1 * dv2 - du2 * dv1;
+    if (!(std::fabs(det) > 0) || !std::isfinite(det)) continue;
+    // dP/du and dP/dv times |det| (twice the triangle's UV area): larger triangles count more.
+    const double s = det > 0 ? 1.0 : -1.0;
+    for (int k = 0; k < 3; ++k) {
+      const double tk = (e1[k] * dv2 - e2[k] * dv1) * s, bk = (e2[k] * du1 - e1[k] * du2) * s;
+      for (uint32_t x : v) t[3 * x + size_t(k)] += tk, b[3 * x + size_t(k)] += bk;
+    }
+  }
+  std::vector<float> out(4 * n);
+  for (size_t i = 0; i < n; ++i) {
+    const double N[3] = {nrm[3 * i], nrm[3 * i + 1], nrm[3 * i + 2]};
+    double T[3] = {t[3 * i], t[3 * i + 1], t[3 * i + 2]};
+    const double d = T[0] * N[0] + T[1] * N[1] + T[2] * N[2];
+    for (int k = 0; k < 3; ++k) T[k] -= d * N[k];
+    double l = std::sqrt(T[0] * T[0] + T[1] * T[1] + T[2] * T[2]);
+    if (!(l > 1e-20)) {
+      // Any unit vector perpendicular to the normal.
+      const double a[3] = {std::fabs(N[0]) < 0.9 ? 1.0 : 0.0, std::fabs(N[0]) < 0.9 ? 0.0 : 1.0, 0};
+      const double e = a[0] * N[0] + a[1] * N[1];
+      for (int k = 0; k < 3; ++k) T[k] = a[k] - e * N[k];
+      l = std::sqrt(T[0] * T[0] + T[1] * T[1] + T[2] * T[2]);
+    }
+    const double C[3] = {N[1] * T[2] - N[2] * T[1], N[2] * T[0] - N[0] * T[2],
+                         N[0] * T[1] - N[1] * T[0]};
+    const double w = C[0] * b[3 * i] + C[1] * b[3 * i + 1] + C[2] * b[3 * i + 2] < 0 ? -1.0 : 1.0;
+    for (int k = 0; k < 3; ++k) out[4 * i + size_t(k)] = float(T[k] / l);
+    out[4 * i + 3] = float(w);
+  }
+  return out;
+}
+
 }  // namespace
 
 void write_glb(const Mesh& m, std::string& out) {
@@ -107,6 +157,12 @@ void write_glb(const Mesh& m, const GlbTextures& textures, std::string& out) {
     prim.attributes["TEXCOORD_0"] =
         add_accessor(model, add_view(model, bin, uv, TINYGLTF_TARGET_ARRAY_BUFFER),
                      TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC2, nverts);
+  if (!textures.normal_png.empty() && has_uv) {
+    const std::vector<float> tan = tangents(pos, nrm, split.uvs, tris);
+    prim.attributes["TANGENT"] =
+        add_accessor(model, add_view(model, bin, tan, TINYGLTF_TARGET_ARRAY_BUFFER),
+                     TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, nverts);
+  }
   if (has_c)
     prim.attributes["COLOR_0"] =
         add_accessor(model, add_view(model, bin, col, TINYGLTF_TARGET_ARRAY_BUFFER),

@@ -61,6 +61,37 @@ Rgba8 blend(Rgba8 dst, const float src[4], BlendMode mode, float w) {
   return rgba8_from_floats(o[0], o[1], o[2], o[3]);
 }
 
+// Blends the brush's material channels into an RMH texel at strength w: each channel on starts
+// from the texel's value over its default (by the texel's coverage), the others keep that
+// value; the texel comes out fully covered.
+Rgba8 blend_rmh(Rgba8 dst, Rgba8 background, const ChannelPaint ch[kMaterialChannels], float w) {
+  float d[4], def[4], o[3];
+  rgba8_to_float(dst, d);
+  rgba8_to_float(background, def);
+  for (int k = 0; k < kMaterialChannels; ++k) {
+    float v = d[k] * d[3] + def[k] * (1 - d[3]);
+    if (ch[k].on) {
+      const float a = w * ch[k].opacity, s = ch[k].value;
+      switch (ch[k].blend) {
+        case BlendMode::mix:
+          v += (s - v) * a;
+          break;
+        case BlendMode::add:
+          v = std::min(1.0f, v + s * a);
+          break;
+        case BlendMode::multiply:
+          v *= 1 - a + a * s;
+          break;
+        case BlendMode::erase:
+          v += (def[k] - v) * a;
+          break;
+      }
+    }
+    o[k] = v;
+  }
+  return rgba8_from_floats(o[0], o[1], o[2], 1.0f);
+}
+
 inline float smooth01(float x) {
   x = std::clamp(x, 0.0f, 1.0f);
   return x * x * (3 - 2 * x);
@@ -189,6 +220,13 @@ void check_brush(const Brush& b, const char* what) {
     bad("depth", "must be 1-" + std::to_string(octree::kMaxDepth));
   if (!finite_in(b.falloff_angle_deg, 0, 90)) bad("falloff angle", "must be 0-90 degrees");
   if (int(b.blend) > int(BlendMode::erase)) bad("blend", "is not a blend mode");
+  for (int k = 0; k < kMaterialChannels; ++k) {
+    const ChannelPaint& c = b.material[k];
+    const std::string name = channel_name(MaterialChannel(k));
+    if (!finite_in(c.value, 0, 1)) bad(name.c_str(), "must be a number in [0, 1]");
+    if (!finite_in(c.opacity, 0, 1)) bad((name + " opacity").c_str(), "must be a number in [0, 1]");
+    if (int(c.blend) > int(BlendMode::erase)) bad((name + " blend").c_str(), "is not a blend mode");
+  }
 }
 
 namespace {
@@ -234,12 +272,17 @@ struct PolylineWalk {
 // The per-stroke state: the brush, the eye, and per texel the colour before the stroke and the
 // strongest weight any dab of the stroke gave it.
 struct StrokePainter::State : LeafPainter {
-  State(OctreeTexture& t, const PaintSurface& s) : tex(t), surf(s), refiner(t, s) {}
+  State(OctreeTexture& t, const PaintSurface& s, PaintTarget to)
+      : tex(t), surf(s), refiner(t, s), target(to) {}
 
   OctreeTexture& tex;
   const PaintSurface& surf;
   Refiner refiner;
+  PaintTarget target;
   Brush brush;
+  // The stroke's ceiling in weight(): the colour's opacity, or 1 for an RMH texture, whose
+  // channels each apply their own in blend_rmh.
+  float opacity = 1;
   bool has_camera = false;
   PaintCamera camera;
   StrokeStats stats;
@@ -283,7 +326,7 @@ struct StrokePainter::State : LeafPainter {
     if (!(facing > 0)) return 0;
     const float cs = cos_falloff;
     const float fa = facing >= cs ? 1.0f : smooth01(facing / cs);
-    const float w = brush.opacity * f * fa;
+    const float w = opacity * f * fa;
     if (!(w > 0)) return 0;
     // Off the surface by a thousandth of the cell: far less than any sheet the tags separate.
     const float eps = std::max(half * 2e-3f, tex.size() * 1e-6f);
@@ -301,6 +344,11 @@ struct StrokePainter::State : LeafPainter {
   void paint(const CellBox& box, LeafCell& cell, std::span<const uint32_t> cell_tris,
              uint32_t memo) override {
     shard(~uint64_t(0))->paint(box, cell, cell_tris, memo);
+  }
+
+  Rgba8 blend_texel(Rgba8 orig, float w) const {
+    return target == PaintTarget::color ? blend(orig, brush.color, brush.blend, w)
+                                        : blend_rmh(orig, tex.background(), brush.material, w);
   }
 
   void dab(V3 centre, float region_r) {
@@ -352,7 +400,7 @@ struct StrokePainter::State::Shard : LeafPainter {
     Texel& tx = texels.find_or_add(key, Texel{cell.s[side], 0.0f});
     if (w <= tx.w) return;
     tx.w = w;
-    const Rgba8 nc = blend(tx.orig, st.brush.color, st.brush.blend, w);
+    const Rgba8 nc = st.blend_texel(tx.orig, w);
     if (nc != cell.s[side]) ++samples_changed, cell.s[side] = nc;
   }
 
@@ -464,8 +512,8 @@ LeafPainter* StrokePainter::State::shard(uint64_t key) {
 }
 
 StrokePainter::StrokePainter(OctreeTexture& texture, const PaintSurface& surface,
-                             PaintHistory* history)
-    : t_(texture), s_(surface), history_(history) {}
+                             PaintHistory* history, PaintTarget target)
+    : t_(texture), s_(surface), history_(history), target_(target) {}
 
 StrokePainter::~StrokePainter() {
   if (st_) {
@@ -479,8 +527,9 @@ void StrokePainter::begin(const Brush& brush, const PaintCamera* camera) {
   if (camera && !camera->valid())
     throw InputError("camera: degenerate (eye at the target, up along the view, or bad fovy/size)");
   if (st_) end();
-  st_ = new State(t_, s_);
+  st_ = new State(t_, s_, target_);
   st_->brush = brush;
+  st_->opacity = target_ == PaintTarget::color ? brush.opacity : 1.0f;
   st_->cos_falloff = std::cos(brush.falloff_angle_deg * 3.14159265f / 180.0f);
   st_->has_camera = camera != nullptr;
   st_->reuse = reuse_;
@@ -628,24 +677,33 @@ void refine_surface(OctreeTexture& t, const PaintSurface& s, int depth) {
 
 namespace {
 
+// What a fill writes into a texel: the brush's colour, or its material channels (target rmh).
+struct FillBlend {
+  const Brush* brush;
+  PaintTarget target;
+  Rgba8 background;
+  Rgba8 operator()(Rgba8 c) const {
+    return target == PaintTarget::color ? blend(c, brush->color, brush->blend, brush->opacity)
+                                        : blend_rmh(c, background, brush->material, 1.0f);
+  }
+};
+
 struct FillPainter : LeafPainter {
-  const float* color;
-  BlendMode mode;
-  float opacity;
+  explicit FillPainter(const FillBlend& b) : blend_texel(b) {}
+  FillBlend blend_texel;
   size_t changed = 0;
   // Per task cell a painter of its own (its count), so a fill runs on TBB's threads.
   std::unordered_map<uint64_t, std::unique_ptr<FillPainter>> shards;
   void paint(const CellBox&, LeafCell& cell, std::span<const uint32_t>, uint32_t) override {
     for (int side = 0; side < (cell.dbl ? 2 : 1); ++side) {
-      const Rgba8 nc = blend(cell.s[side], color, mode, opacity);
+      const Rgba8 nc = blend_texel(cell.s[side]);
       if (nc != cell.s[side]) cell.s[side] = nc, ++changed;
     }
   }
   bool sharded() const override { return true; }
   LeafPainter* shard(uint64_t key) override {
     std::unique_ptr<FillPainter>& p = shards[key];
-    if (!p)
-      p = std::make_unique<FillPainter>(), p->color = color, p->mode = mode, p->opacity = opacity;
+    if (!p) p = std::make_unique<FillPainter>(blend_texel);
     return p.get();
   }
   size_t total() const {
@@ -654,6 +712,27 @@ struct FillPainter : LeafPainter {
     return n;
   }
 };
+
+size_t fill_texture(OctreeTexture& t, const PaintSurface& s, const Brush& b, PaintTarget target,
+                    int depth) {
+  const FillBlend fb{&b, target, t.background()};
+  if (depth > 0) {
+    FillPainter p(fb);
+    Refiner r(t, s);
+    const std::vector<uint32_t> all = all_triangles(s);
+    r.run(Region{}, all, depth, &p);
+    return p.total();
+  }
+  std::vector<std::pair<size_t, Rgba8>> writes;
+  t.for_each_sample([&](const OctreeSample& x) {
+    const Rgba8 nc = fb(x.color);
+    if (nc != x.color) writes.push_back({x.word, nc});
+  });
+  OctreeEditor ed(t);
+  for (auto [w, c] : writes) ed.set(uint32_t(w), c);
+  recompute_averages(t);
+  return writes.size();
+}
 
 }  // namespace
 
@@ -664,23 +743,19 @@ size_t fill(OctreeTexture& t, const PaintSurface& s, const float color[4], Blend
   b.opacity = opacity, b.blend = mode;
   if (depth > 0) b.depth = depth;
   check_brush(b, "fill");
-  if (depth > 0) {
-    FillPainter p;
-    p.color = color, p.mode = mode, p.opacity = opacity;
-    Refiner r(t, s);
-    const std::vector<uint32_t> all = all_triangles(s);
-    r.run(Region{}, all, depth, &p);
-    return p.total();
-  }
-  std::vector<std::pair<size_t, Rgba8>> writes;
-  t.for_each_sample([&](const OctreeSample& x) {
-    const Rgba8 nc = blend(x.color, color, mode, opacity);
-    if (nc != x.color) writes.push_back({x.word, nc});
-  });
-  OctreeEditor ed(t);
-  for (auto [w, c] : writes) ed.set(uint32_t(w), c);
-  recompute_averages(t);
-  return writes.size();
+  return fill_texture(t, s, b, PaintTarget::color, depth);
+}
+
+size_t fill(MaterialTexture& m, const PaintSurface& s, const Brush& brush, int depth,
+            MaterialDefaults defaults) {
+  Brush b = brush;
+  if (depth > 0) b.depth = depth;
+  check_brush(b, "fill");
+  size_t n = 0;
+  if (b.paint_color) n += fill_texture(m.color, s, b, PaintTarget::color, depth);
+  if (b.paints_material())
+    n += fill_texture(m.ensure_rmh(s, defaults), s, b, PaintTarget::rmh, depth);
+  return n;
 }
 
 bool pick_world(const OctreeTexture& t, const PaintSurface& s, const float p[3], float max_dist,

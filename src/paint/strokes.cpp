@@ -1,5 +1,6 @@
 // Stroke scripts: a strict JSON reader (every field checked, unknown keys refused so a typo never
 // passes silently) and the runner.
+#include <algorithm>
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -104,8 +105,33 @@ class Reader {
     fail(where, "'" + s + "' is not a blend mode (mix, add, multiply, erase)");
   }
 
-  // The brush fields a stroke or fill may carry.
+  // A material channel: a value in [0, 1] (mixed in at opacity 1), or {"value", "blend",
+  // "opacity"}.
+  ChannelPaint channel_paint(const json& j, const std::string& where) const {
+    ChannelPaint p;
+    p.on = true;
+    if (j.is_number()) {
+      p.value = float(number_in(j, where, 0, 1));
+      return p;
+    }
+    if (!j.is_object())
+      fail(where, "expected a number in [0, 1] or {\"value\", \"blend\", \"opacity\"}");
+    keys(j, where, {"value", "blend", "opacity"});
+    if (j.contains("value")) p.value = float(number_in(j["value"], where + ".value", 0, 1));
+    if (j.contains("blend")) p.blend = blend(j["blend"], where + ".blend");
+    if (!j.contains("value") && p.blend != BlendMode::erase) fail(where, "missing 'value'");
+    if (j.contains("opacity")) p.opacity = float(number_in(j["opacity"], where + ".opacity", 0, 1));
+    return p;
+  }
+
+  // The brush fields a stroke or fill may carry. An entry that paints a material channel paints
+  // colour only when it gives one.
   void brush_fields(const json& e, const std::string& w, StrokeCommand& c) const {
+    for (int k = 0; k < kMaterialChannels; ++k) {
+      const char* name = channel_name(MaterialChannel(k));
+      if (e.contains(name)) c.brush.material[k] = channel_paint(e[name], w + "." + name);
+    }
+    c.brush.paint_color = !c.brush.paints_material() || e.contains("color");
     if (e.contains("color")) color(e["color"], w + ".color", c.brush.color);
     if (e.contains("opacity"))
       c.brush.opacity = float(number_in(e["opacity"], w + ".opacity", 0, 1));
@@ -145,7 +171,7 @@ class Reader {
     if (type == "stroke") {
       keys(e, w,
            {"type", "points", "radius", "color", "opacity", "hardness", "space", "spacing", "blend",
-            "depth", "falloff_angle"});
+            "depth", "falloff_angle", "roughness", "metallic", "height"});
       if (!e.contains("points")) fail(w, "missing 'points'");
       if (!e.contains("radius")) fail(w, "missing 'radius'");
       const std::string space = e.contains("space") ? text(e["space"], w + ".space") : "world";
@@ -187,9 +213,10 @@ class Reader {
              "strokes' length)");
       check_brush(c.brush, (name_ + ": " + w).c_str());
     } else if (type == "fill") {
-      keys(e, w, {"type", "color", "opacity", "blend", "depth"});
-      if (!e.contains("color") && (!e.contains("blend") || e["blend"] != "erase"))
-        fail(w, "missing 'color'");
+      keys(e, w, {"type", "color", "opacity", "blend", "depth", "roughness", "metallic", "height"});
+      if (!e.contains("color") && (!e.contains("blend") || e["blend"] != "erase") &&
+          !e.contains("roughness") && !e.contains("metallic") && !e.contains("height"))
+        fail(w, "missing 'color' (or a material channel)");
       c.type = StrokeCommand::Type::fill;
       brush_fields(e, w, c);
       c.fill_refines = c.depth_given;
@@ -266,15 +293,15 @@ StrokeScript read_strokes(const std::filesystem::path& path, int depth) {
   return parse_strokes(data, path.string(), depth);
 }
 
-ScriptResult run_strokes(OctreeTexture& t, const PaintSurface& s, const StrokeScript& script,
-                         PaintHistory& history) {
+ScriptResult run_strokes(MaterialTexture& m, const PaintSurface& s, const StrokeScript& script,
+                         PaintHistory& history, MaterialDefaults defaults) {
   ScriptResult r;
   const PaintCamera* cam = script.camera ? &*script.camera : nullptr;
   for (size_t i = 0; i < script.commands.size(); ++i) {
     const StrokeCommand& c = script.commands[i];
     switch (c.type) {
       case StrokeCommand::Type::stroke: {
-        StrokePainter p(t, s, &history);
+        MaterialPainter p(m, s, &history, defaults);
         p.begin(c.brush, cam);
         if (c.screen)
           p.stroke_screen(c.pixels);
@@ -284,36 +311,40 @@ ScriptResult run_strokes(OctreeTexture& t, const PaintSurface& s, const StrokeSc
         break;
       }
       case StrokeCommand::Type::fill: {
-        history.begin(t);
+        if (c.brush.paints_material()) m.ensure_rmh(s, defaults);
+        history.begin(m);
         StrokeStats st;
         try {
-          st.samples_changed = fill(t, s, c.brush.color, c.brush.blend, c.brush.opacity,
-                                    c.fill_refines ? c.brush.depth : 0);
+          st.samples_changed = fill(m, s, c.brush, c.fill_refines ? c.brush.depth : 0, defaults);
         } catch (...) {
-          history.end(t);
+          history.end(m);
           throw;
         }
-        history.end(t);
+        history.end(m);
         r.strokes.push_back(st);
         break;
       }
       case StrokeCommand::Type::pick: {
         PickResult pr;
         pr.command = i;
+        MaterialPick mp;
         if (c.screen) {
           if (!cam) throw InputError("pick: 'pixel' needs a camera");
-          pr.found = pick_screen(t, s, *cam, c.pixels[0], c.pixels[1], pr.rgba);
+          mp = pick_screen(m, s, *cam, c.pixels[0], c.pixels[1]);
         } else {
-          pr.found = pick_world(t, s, c.points.data(), INFINITY, pr.rgba);
+          mp = pick_world(m, s, c.points.data(), INFINITY);
         }
+        pr.found = mp.found;
+        std::copy_n(mp.rgba, 4, pr.rgba);
+        std::copy_n(mp.channels, 3, pr.channels);
         r.picks.push_back(pr);
         break;
       }
       case StrokeCommand::Type::undo:
-        r.undos += history.undo(t);
+        r.undos += history.undo(m);
         break;
       case StrokeCommand::Type::redo:
-        r.redos += history.redo(t);
+        r.redos += history.redo(m);
         break;
     }
   }

@@ -10,6 +10,7 @@
 #include "core/timer.hpp"
 #include "gl_util.hpp"
 #include "limn/render/draw.hpp"
+#include "material_shader.hpp"
 #include "shaders.hpp"
 
 namespace limn {
@@ -81,8 +82,8 @@ void triangulate(const Mesh& m, size_t f, std::vector<uint32_t>& out) {
 
 struct MeshDrawer::Impl {
   // One program per combination of options, compiled at its first use: bit 0 an octree texture,
-  // bit 1 outlines.
-  std::array<gl::Program, 4> programs;
+  // bit 1 outlines, bit 2 a material.
+  std::array<gl::Program, 8> programs;
   gl::Buffer vertices;
   gl::VertexArray vao;
   gl::DrawQueries queries;
@@ -166,11 +167,14 @@ DrawStats MeshDrawer::draw(const Camera& camera, const DrawOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
   Impl& m = *impl_;
   const std::array<float, 16> vp = gl::view_projection(camera, m.bounds);
-  gl::Program& program = m.programs[size_t((o.texture ? 1 : 0) | (o.outline ? 2 : 0))];
+  gl::Program& program =
+      m.programs[size_t((o.texture ? 1 : 0) | (o.outline ? 2 : 0) | (o.material ? 4 : 0))];
   if (!program.get()) {
-    const std::string fs = std::string("#version 450 core\n") +
-                           (o.outline ? "#define OUTLINE\n" : "") + shaders::shade +
-                           (o.texture ? shaders::octree : shaders::no_octree) + shaders::mesh_frag;
+    const std::string fs =
+        std::string("#version 450 core\n") + (o.outline ? "#define OUTLINE\n" : "") +
+        (o.material ? "#define MATERIAL\n" : "") + shaders::shade +
+        (o.texture ? shaders::octree : shaders::no_octree) +
+        (o.material ? detail::material_glsl() : std::string()) + shaders::mesh_frag;
     program =
         gl::program("mesh", {{GL_VERTEX_SHADER, shaders::mesh_vert}, {GL_FRAGMENT_SHADER, fs}});
   }
@@ -182,6 +186,10 @@ DrawStats MeshDrawer::draw(const Camera& camera, const DrawOptions& o) {
   glUniform3fv(glGetUniformLocation(prog, "eye"), 1, camera.eye);
   glUniform1f(glGetUniformLocation(prog, "uv_checker"), o.uv_checker);
   if (o.texture) o.texture->bind(prog, o.texture_nearest ? 1 : 2);
+  if (o.material) {
+    o.material->bind(prog, 2, "rmh_", detail::kRmhBinding);
+    glUniform1f(glGetUniformLocation(prog, "height_scale"), o.height_scale);
+  }
   glBindVertexArray(m.vao.get());
   // Without colours of its own the mesh takes the options' colour (a constant attribute).
   if (!m.has_colors) glDisableVertexArrayAttrib(m.vao.get(), 2), glVertexAttrib3fv(2, o.color);

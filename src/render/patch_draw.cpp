@@ -19,6 +19,7 @@
 #include "limn/mesh/topology.hpp"
 #include "limn/render/draw.hpp"
 #include "limn/subdiv/tessellate.hpp"
+#include "material_shader.hpp"
 #include "shaders.hpp"
 
 namespace limn {
@@ -225,8 +226,9 @@ struct PatchDrawer::Impl {
   size_t regular = 0, gregory = 0, point_floats = 0;
   uint32_t max_index = 0;
   // The drawing programs (regular, end caps) of each combination of options, compiled at its
-  // first use: bit 0 an octree texture, bit 1 outlines, bit 2 depth colours, bit 3 UVs.
-  std::array<std::array<gl::Program, 2>, 16> programs;
+  // first use: bit 0 an octree texture, bit 1 outlines, bit 2 depth colours, bit 3 UVs, bit 4 a
+  // material.
+  std::array<std::array<gl::Program, 2>, 32> programs;
   std::string vs16, vs20, tc16, tc20, te16, te20;
   gl::Buffer ptex_uvs;    // 4 UVs per ptex face when the cage has linear UVs
   gl::Buffer uv_patches;  // smooth UVs: per patch its face-varying patch (UvPatch)
@@ -268,15 +270,17 @@ struct PatchDrawer::Impl {
 
 const std::array<gl::Program, 2>& PatchDrawer::Impl::programs_for(const DrawOptions& o) {
   const bool uvs = o.uv_checker > 0 && has_uvs;
-  const int flags =
-      (o.texture ? 1 : 0) | (o.outline ? 2 : 0) | (o.depth_colors ? 4 : 0) | (uvs ? 8 : 0);
+  const int flags = (o.texture ? 1 : 0) | (o.outline ? 2 : 0) | (o.depth_colors ? 4 : 0) |
+                    (uvs ? 8 : 0) | (o.material ? 16 : 0);
   std::array<gl::Program, 2>& p = programs[size_t(flags)];
   if (p[0].get()) return p;
   const std::string defines =
-      fmt::format("{}{}{}", o.outline ? "#define OUTLINE\n" : "",
-                  o.depth_colors ? "#define DEPTH_COLORS\n" : "", uvs ? "#define UVS\n" : "");
+      fmt::format("{}{}{}{}", o.outline ? "#define OUTLINE\n" : "",
+                  o.depth_colors ? "#define DEPTH_COLORS\n" : "", uvs ? "#define UVS\n" : "",
+                  o.material ? "#define MATERIAL\n" : "");
   const std::string fs = with_header(16, defines.c_str(), shaders::patch_info, shaders::shade,
                                      o.texture ? shaders::octree : shaders::no_octree) +
+                         (o.material ? detail::material_glsl() : std::string()) +
                          shaders::patch_frag;
   // With UVs the evaluation stages compute them too (a define ahead of patch_eval).
   const char* uv_define = smooth_uvs ? "#define SMOOTH_UVS\n" : "#define UVS\n";
@@ -512,6 +516,10 @@ DrawStats PatchDrawer::draw(const Camera& camera, const DrawOptions& o) {
       glUniform1f(glGetUniformLocation(prog, "uv_checker"), o.uv_checker);
     }
     if (o.texture) o.texture->bind(prog, o.texture_nearest ? 1 : 2);
+    if (o.material) {
+      o.material->bind(prog, 2, "rmh_", detail::kRmhBinding);
+      glUniform1f(glGetUniformLocation(prog, "height_scale"), o.height_scale);
+    }
     glPatchParameteri(GL_PATCH_VERTICES, cvs);
     // Patches whose faces are all out of view are left out.
     const std::span<const uint32_t> faces(m.patch_face.data() + (pass ? m.regular : 0), count);

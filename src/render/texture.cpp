@@ -3,16 +3,56 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cstring>
 #include <stdexcept>
 
 #include "gl_util.hpp"
 #include "limn/render/texture.hpp"
+#include "material_shader.hpp"
 #include "shaders.hpp"
 
 namespace limn {
 
-namespace {}  // namespace
+namespace detail {
+
+const std::string& material_glsl() {
+  static const std::string source = [] {
+    // Identifier by identifier: oct_x -> rmh_x, and the file's other globals renamed alike.
+    const std::string in = shaders::octree;
+    std::string out;
+    auto ident = [](char c, bool first) {
+      return std::isalpha(static_cast<unsigned char>(c)) || c == '_' ||
+             (!first && std::isdigit(static_cast<unsigned char>(c)));
+    };
+    for (size_t i = 0; i < in.size();) {
+      if (!ident(in[i], true)) {
+        out += in[i++];
+        continue;
+      }
+      size_t j = i;
+      while (j < in.size() && ident(in[j], false)) ++j;
+      const std::string w = in.substr(i, j - i);
+      if (w.rfind("oct_", 0) == 0)
+        out += "rmh_" + w.substr(4);
+      else if (w == "pool" || w == "kD" || w == "kFlag")
+        out += "rmh_" + w;
+      else if (w == "OctreePool")
+        out += "RmhPool";
+      else
+        out += w;
+      i = j;
+    }
+    const std::string from = "binding = 5", to = "binding = " + std::to_string(kRmhBinding);
+    const size_t at = out.find(from);
+    if (at == std::string::npos) throw std::logic_error("octree.glsl: no pool binding");
+    out.replace(at, from.size(), to);
+    return out + shaders::material;
+  }();
+  return source;
+}
+
+}  // namespace detail
 
 struct GpuOctreeTexture::Impl {
   gl::Buffer pool;
@@ -118,15 +158,21 @@ size_t GpuOctreeTexture::last_upload_words() const {
 }
 
 void GpuOctreeTexture::bind(unsigned program, int mode) const {
+  bind(program, mode, "oct_", 5);
+}
+
+void GpuOctreeTexture::bind(unsigned program, int mode, const std::string& prefix,
+                            unsigned binding) const {
   const Impl& m = *impl_;
   const GLuint prog = program;
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, m.pool.get());
-  glUniform3d(glGetUniformLocation(prog, "oct_origin"), m.origin[0], m.origin[1], m.origin[2]);
-  glUniform1d(glGetUniformLocation(prog, "oct_scale"), m.scale);
-  glUniform1f(glGetUniformLocation(prog, "oct_size"), m.size);
-  glUniform1ui(glGetUniformLocation(prog, "oct_background"), m.background);
-  glUniform1i(glGetUniformLocation(prog, "oct_mode"), mode);
-  glUniform3fv(glGetUniformLocation(prog, "oct_tags"), 15, m.tags);
+  auto at = [&](const char* name) { return glGetUniformLocation(prog, (prefix + name).c_str()); };
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding, m.pool.get());
+  glUniform3d(at("origin"), m.origin[0], m.origin[1], m.origin[2]);
+  glUniform1d(at("scale"), m.scale);
+  glUniform1f(at("size"), m.size);
+  glUniform1ui(at("background"), m.background);
+  glUniform1i(at("mode"), mode);
+  glUniform3fv(at("tags"), 15, m.tags);
 }
 
 GpuOctreeTexture::Lookups GpuOctreeTexture::lookup(std::span<const float> p,

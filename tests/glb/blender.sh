@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # A painted torus baked with --atlas into a GLB, opened by Blender's glTF importer, which must
-# find the material with its base colour image and the UVs. Skipped (exit 77) without Blender
+# find the material with its base colour image and the UVs; then a torus painted with material
+# channels, whose GLB must also give Blender roughness and metalness from an image and a normal
+# map. Skipped (exit 77) without Blender
 # (Debian's `blender`, not in scripts/packages.txt: too large for CI's time).
 # Usage: blender.sh LIMN_CLI
 set -euo pipefail
@@ -13,8 +15,20 @@ trap 'rm -rf "$work"' EXIT
 echo '{"strokes": [{"type": "fill", "color": [0.2, 0.6, 0.3, 1]}]}' >"$work/fill.json"
 "$limn" paint "$work/torus.obj" --strokes "$work/fill.json" -o "$work/torus.lot" >/dev/null
 "$limn" bake "$work/torus.lot" "$work/torus.obj" --atlas --size 256 -o "$work/torus.glb" >/dev/null
+cat >"$work/material.json" <<'JSON'
+{"strokes": [{"type": "fill", "color": [0.7, 0.5, 0.3, 1]},
+ {"points": [[1.4, 0, 0], [0, 1.4, 0]], "radius": 0.3, "color": [0.9, 0.1, 0.1], "metallic": 1,
+  "roughness": 0.2, "depth": 7},
+ {"points": [[0, -1.4, 0.3], [1.0, -1.0, 0.3]], "radius": 0.25, "height": 1, "depth": 7}]}
+JSON
+"$limn" paint "$work/torus.obj" --strokes "$work/material.json" -o "$work/material.lot" >/dev/null
+"$limn" bake "$work/material.lot" "$work/torus.obj" --atlas --size 256 --normal-map \
+  -o "$work/material.glb" >/dev/null
 rc=0
-out=$(blender -b --factory-startup --python-exit-code 2 --python "$here/blender_check.py" \
-  -- "$work/torus.glb" 256 2>&1) || rc=$?
-grep -E "^blender:|Error|Traceback|Assertion" <<<"$out" || true
+for check in "$work/torus.glb 256" "$work/material.glb 256 material"; do
+  # shellcheck disable=SC2086
+  out=$(blender -b --factory-startup --python-exit-code 2 --python "$here/blender_check.py" \
+    -- $check 2>&1) || rc=$?
+  grep -E "^blender:|Error|Traceback|Assertion" <<<"$out" || true
+done
 exit "$rc"

@@ -70,8 +70,9 @@ TEST_F(PaintCli, AScriptedStrokeOnTheBunnyBakesToAColouredMesh) {
   for (const char* k : {"nodes", "leaves", "bytes", "bytes_per_painted_texel", "max_depth"})
     EXPECT_TRUE(st.contains(k)) << k;
   EXPECT_EQ(st["max_depth"].get<int>(), 10);
-  // The file: a 64-byte header, the pool, 8 bytes per free block.
-  EXPECT_EQ(st["bytes"].get<size_t>() + 8 * st["free_blocks"].get<size_t>() + 64,
+  // The file: a 96-byte header, the pool, 8 bytes per free block (no material channels).
+  EXPECT_TRUE(st["rmh"].is_null());
+  EXPECT_EQ(st["bytes"].get<size_t>() + 8 * st["free_blocks"].get<size_t>() + 96,
             fs::file_size(tex));
   EXPECT_GT(st["bytes_per_painted_texel"].get<double>(), 0.0);
 
@@ -85,7 +86,7 @@ TEST_F(PaintCli, AScriptedStrokeOnTheBunnyBakesToAColouredMesh) {
   const Mesh bunny = read_mesh(kBunny);
   const Mesh baked = read_mesh(ply);
   ASSERT_EQ(baked.colors.size(), 4 * bunny.vertex_count());
-  const OctreeTexture t = load_lot(tex);
+  const OctreeTexture t = load_lot(tex).color;
   const std::vector<float> normals = vertex_normals(bunny);
   const std::vector<std::array<double, 3>> line = {{-0.0665, 0.101466, 0.041219},
                                                    {-0.039509, 0.098682, 0.041774},

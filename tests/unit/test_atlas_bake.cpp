@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <random>
 
+#include "bake_oracle.hpp"
 #include "cli_runner.hpp"
 #include "limn/atlas/unwrap.hpp"
 #include "limn/io/mesh_io.hpp"
@@ -46,82 +47,26 @@ OctreeTexture smooth_paint(const Mesh& m, uint32_t seed) {
   return t;
 }
 
-// Bilinear sample (texel centres at +0.5, edges clamped) of tile `tile` at (u, v), v up.
-void sample(const Image& img, int tile, double u, double v, double out[4]) {
-  const double x = (u - tile % 10) * img.width - 0.5, y = (1 - (v - tile / 10)) * img.height - 0.5;
-  const int x0 = int(std::floor(x)), y0 = int(std::floor(y));
-  const double fx = x - x0, fy = y - y0;
-  for (int k = 0; k < 4; ++k) out[k] = 0;
-  for (int dy = 0; dy < 2; ++dy)
-    for (int dx = 0; dx < 2; ++dx) {
-      const int xx = std::clamp(x0 + dx, 0, img.width - 1),
-                yy = std::clamp(y0 + dy, 0, img.height - 1);
-      const double w = (dx ? fx : 1 - fx) * (dy ? fy : 1 - fy);
-      for (int k = 0; k < 4; ++k) out[k] += w * img.rgba[4 * (size_t(yy) * img.width + xx) + k];
-    }
-}
-
 struct Errors {
   std::vector<double> steps;  // per sample: the largest channel difference, in 8-bit steps
-  double quantile(double q) {
-    std::sort(steps.begin(), steps.end());
-    return steps[size_t(q * double(steps.size() - 1))];
-  }
+  double quantile(double q) { return test::quantile(steps, q); }
 };
 
 // Compares `samples` random surface points of `m` (area-weighted) between the baked tiles and
 // the texture's filtered lookup.
 Errors compare(const OctreeTexture& t, const Mesh& m, const std::vector<Image>& tiles,
                const std::vector<int>& tile_ids, int samples) {
-  std::vector<double> cdf;
-  std::vector<std::array<uint32_t, 3>> tris;
-  double total = 0;
-  for (uint32_t f = 0; f < m.face_count(); ++f)
-    for (uint32_t k = 1; k + 1 < m.face_size(f); ++k) {
-      const uint32_t o = m.face_offsets[f];
-      tris.push_back({o, o + k, o + k + 1});
-      const float* a = &m.positions[3 * size_t(m.face_vertices[o])];
-      const float* b = &m.positions[3 * size_t(m.face_vertices[o + k])];
-      const float* c = &m.positions[3 * size_t(m.face_vertices[o + k + 1])];
-      const double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-      const double e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-      const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
-                           e1[0] * e2[1] - e1[1] * e2[0]};
-      total += std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-      cdf.push_back(total);
-    }
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<double> u01(0, 1);
   Errors e;
-  for (int i = 0; i < samples; ++i) {
-    const size_t ti =
-        size_t(std::lower_bound(cdf.begin(), cdf.end(), u01(rng) * total) - cdf.begin());
-    const auto& tri = tris[std::min(ti, tris.size() - 1)];
-    double r1 = u01(rng), r2 = u01(rng);
-    if (r1 + r2 > 1) r1 = 1 - r1, r2 = 1 - r2;
-    const double w[3] = {1 - r1 - r2, r1, r2};
-    float p[3] = {0, 0, 0}, n[3];
-    double uv[2] = {0, 0};
-    for (int j = 0; j < 3; ++j) {
-      for (int k = 0; k < 3; ++k)
-        p[k] += float(w[j]) * m.positions[3 * size_t(m.face_vertices[tri[j]]) + k];
-      for (int k = 0; k < 2; ++k) uv[k] += w[j] * m.uvs[2 * size_t(m.uv_indices[tri[j]]) + k];
-    }
-    const float* a = &m.positions[3 * size_t(m.face_vertices[tri[0]])];
-    const float* b = &m.positions[3 * size_t(m.face_vertices[tri[1]])];
-    const float* c = &m.positions[3 * size_t(m.face_vertices[tri[2]])];
-    const float e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]},
-                e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    n[0] = e1[1] * e2[2] - e1[2] * e2[1], n[1] = e1[2] * e2[0] - e1[0] * e2[2],
-    n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+  for (const test::SurfacePoint& s : test::random_surface_points(m, samples, 7)) {
     float want[4];
-    if (!lookup_filtered(t, p, n, 0.0f, want)) rgba8_to_float(t.background(), want);
-    const int tile = int(std::floor(uv[0])) + 10 * int(std::floor(uv[1]));
+    if (!lookup_filtered(t, s.p, s.n, 0.0f, want)) rgba8_to_float(t.background(), want);
+    const int tile = s.tile();
     const size_t at = size_t(std::find(tile_ids.begin(), tile_ids.end(), tile) - tile_ids.begin());
     EXPECT_LT(at, tile_ids.size()) << "a point in tile " << tile << ", which was not baked";
     if (at >= tile_ids.size()) continue;
     double got[4];
-    sample(tiles[at], tile, uv[0], uv[1], got);
+    const Image& img = tiles[at];
+    test::sample_bilinear(img.rgba.data(), 4, img.width, img.height, tile, s.uv[0], s.uv[1], got);
     double worst = 0;
     for (int k = 0; k < 4; ++k) worst = std::max(worst, std::abs(got[k] - 255.0 * want[k]));
     e.steps.push_back(worst);

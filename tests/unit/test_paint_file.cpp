@@ -130,7 +130,7 @@ TEST(PaintFile, SaveLoadRoundTripsExactly) {
   const fs::path f = dir / "t.lot";
   save_lot(t, f);
   EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);  // no temp
-  OctreeTexture u = load_lot(f);
+  OctreeTexture u = load_lot(f).color;
   EXPECT_TRUE(u == t);
   EXPECT_EQ(serialize_lot(u), slurp(f));
   std::mt19937 rng(1);
@@ -174,7 +174,7 @@ TEST(PaintFile, PoolsPastTwoMiBKeepEveryWord) {
   EXPECT_TRUE(aligned(copy));
   EXPECT_TRUE(copy == t);
   const std::string bytes = serialize_lot(t);
-  const OctreeTexture loaded = parse_lot(bytes, "memory");
+  const OctreeTexture loaded = parse_lot(bytes, "memory").color;
   EXPECT_TRUE(aligned(loaded));
   EXPECT_TRUE(loaded == t);
   PaintHistory h;
@@ -218,7 +218,7 @@ TEST(PaintFile, EveryStateOfAPaintingRoundTrips) {
     odd += compacted.words().size() % 2;
     for (const OctreeTexture* x : {&t, &compacted}) {
       const std::string f = serialize_lot(*x);
-      const OctreeTexture back = parse_lot(f, "state.lot");
+      const OctreeTexture back = parse_lot(f, "state.lot").color;
       ASSERT_TRUE(back == *x) << i;
       ASSERT_EQ(serialize_lot(back), f) << i;
     }
@@ -265,18 +265,18 @@ std::string reseal(std::string f) {
   auto put = [&](size_t at, uint32_t v) {
     for (int k = 0; k < 4; ++k) f[at + size_t(k)] = char(v >> (8 * k) & 255u);
   };
-  put(56, crc32(std::string_view(f).substr(64)));
-  put(60, crc32(std::string_view(f).substr(0, 60)));
+  put(56, crc32(std::string_view(f).substr(96)));  // a colour-only file: the colour payload
+  put(92, crc32(std::string_view(f).substr(0, 92)));
   return f;
 }
 uint32_t word_at(const std::string& f, size_t i) {
   uint32_t v = 0;
   for (int k = 0; k < 4; ++k)
-    v |= uint32_t(static_cast<unsigned char>(f[64 + 4 * i + size_t(k)])) << (8 * k);
+    v |= uint32_t(static_cast<unsigned char>(f[96 + 4 * i + size_t(k)])) << (8 * k);
   return v;
 }
 std::string with_word(std::string f, size_t i, uint32_t v) {
-  for (int k = 0; k < 4; ++k) f[64 + 4 * i + size_t(k)] = char(v >> (8 * k) & 255u);
+  for (int k = 0; k < 4; ++k) f[96 + 4 * i + size_t(k)] = char(v >> (8 * k) & 255u);
   return reseal(f);
 }
 
@@ -302,8 +302,11 @@ TEST(PaintFile, StructurallyBrokenFilesAreRejectedEvenWithValidChecksums) {
   g[47] = '\x01';  // 2^56 pool words
   expect_rejected(reseal(g), "huge.lot");
   g = f;
-  g[8] = 2;  // version 2
+  g[8] = 3;  // version 3
   expect_rejected(reseal(g), "version.lot");
+  g = f;
+  g[16] = 1;  // an RMH texture promised, none there
+  expect_rejected(reseal(g), "no-rmh.lot");
   // Random single-word damage to the structure (not to colours, not to free blocks): every
   // outcome is a refusal or a texture that passes the check and reads without fault (ASan
   // watches).
@@ -338,7 +341,7 @@ TEST(PaintFile, StructurallyBrokenFilesAreRejectedEvenWithValidChecksums) {
     }
     h = with_word(h, w, v);
     try {
-      const OctreeTexture u = parse_lot(h, "damaged.lot");
+      const OctreeTexture u = parse_lot(h, "damaged.lot").color;
       ASSERT_EQ(u.check(), "");
       OctreeSampler smp(u);
       for (int k = 0; k < 50; ++k) {

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "limn/mesh/mesh.hpp"
-#include "limn/paint/texture.hpp"
+#include "limn/paint/material.hpp"
 
 namespace limn {
 
@@ -40,6 +40,31 @@ struct Image {
 Image bake_uv_texture(const OctreeTexture& t, const Mesh& mesh, int width, int height,
                       int gutter = 8, const BakeOptions& opt = {});
 
+/// A one-channel 16-bit image (0-65535 over [0, 1]), rows top to bottom.
+struct Image16 {
+  int width = 0, height = 0;
+  std::vector<uint16_t> values;
+};
+
+/// A material baked into one UV tile (empty images for what was not baked).
+struct MaterialImages {
+  Image base_color;  ///< as bake_uv_texture of the colour texture
+  /// glTF's packing: roughness in green, metalness in blue (red and alpha 255); RMH only.
+  Image metallic_roughness;
+  Image16 height;  ///< RMH only
+  /// Tangent-space normals of the height field (height * height_scale model units): x along +u,
+  /// y along +v (glTF's and OpenGL's convention), RGB = n * 0.5 + 0.5; only when asked.
+  Image normal;
+};
+
+/// Bakes every channel of a material into the mesh's UVs, as bake_uv_texture does (the same
+/// texels, lookups and gutter): the channels' values over their defaults, height in float before
+/// it is rounded to 16 bits (so filtering between texels does not band), and with `normal_map`
+/// a normal map whose slopes are the height field's per model unit on each texel's triangle (a
+/// flat one without RMH). Throws as bake_uv_texture. Parallel. O(W H + texels covered * depth).
+MaterialImages bake_material(const MaterialTexture& m, const Mesh& mesh, int width, int height,
+                             int gutter = 8, const BakeOptions& opt = {}, bool normal_map = false);
+
 /// Throws InputError "TEXTURE_NAME: painted on another mesh ..." when under half of the mesh's
 /// vertices (up to 4096 of them, evenly spread) fall in a leaf of the texture: the texture's
 /// cells follow the surface it was made for, so another mesh mostly misses them. A subdivided,
@@ -56,5 +81,7 @@ std::vector<int> uv_tiles(const Mesh& mesh, size_t* outside = nullptr);
 
 /// PNG bytes of an image (stb_image_write).
 std::string encode_png(const Image& image);
+/// PNG bytes of a 16-bit greyscale image. Throws std::runtime_error for an empty image.
+std::string encode_png16(const Image16& image);
 
 }  // namespace limn

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <span>
 
+#include "limn/paint/material.hpp"
 #include "limn/paint/surface.hpp"
 #include "limn/paint/texture.hpp"
 #include "limn/paint/undo.hpp"
@@ -24,6 +25,16 @@ enum class BlendMode : uint8_t {
   erase      ///< alpha *= 1 - strength; rgb kept
 };
 
+/// How a brush paints one material channel (roughness, metallic or height, each in [0, 1]).
+/// mix: toward `value`; add: + value (clamped); multiply: times mix(1, value, strength); erase:
+/// back toward the channel's default. Strength: the brush's falloff times `opacity`.
+struct ChannelPaint {
+  bool on = false;  ///< painted by this brush
+  float value = 0.5f;
+  BlendMode blend = BlendMode::mix;
+  float opacity = 1.0f;  ///< [0,1]: the most one stroke changes this channel
+};
+
 struct Brush {
   float radius = 0.02f;           ///< model units, or pixels for screen dabs (> 0)
   float color[4] = {1, 0, 0, 1};  ///< straight RGBA in [0,1]
@@ -34,7 +45,19 @@ struct Brush {
   int depth = 10;                   ///< the leaf level the brush refines to, [1, kMaxDepth]
   float falloff_angle_deg = 60.0f;  ///< full strength while the surface faces the eye within this
                                     ///< angle, fading to 0 at 90 degrees; [0, 90]
+  /// Whether the base colour is painted (color, opacity, blend above); off for a brush that
+  /// paints only material channels.
+  bool paint_color = true;
+  /// The material channels, indexed by MaterialChannel (MaterialPainter; a StrokePainter with
+  /// PaintTarget::rmh).
+  ChannelPaint material[kMaterialChannels];
+  /// Whether any material channel is on. O(1).
+  bool paints_material() const { return material[0].on || material[1].on || material[2].on; }
 };
+
+/// Which texture a StrokePainter writes: a colour texture (the brush's colour), or an RMH
+/// texture (the brush's material channels; see material.hpp).
+enum class PaintTarget : uint8_t { color, rmh };
 
 struct StrokeStats {
   size_t dabs = 0;             ///< dabs painted
@@ -59,7 +82,7 @@ class StrokePainter {
  public:
   /// `history` (may be null) records each stroke for undo.
   StrokePainter(OctreeTexture& texture, const PaintSurface& surface,
-                PaintHistory* history = nullptr);
+                PaintHistory* history = nullptr, PaintTarget target = PaintTarget::color);
   ~StrokePainter();
   StrokePainter(const StrokePainter&) = delete;
   StrokePainter& operator=(const StrokePainter&) = delete;
@@ -97,7 +120,42 @@ class StrokePainter {
   OctreeTexture& t_;
   const PaintSurface& s_;
   PaintHistory* history_;
+  PaintTarget target_;
   State* st_ = nullptr;
+  bool reuse_ = true;
+};
+
+/// Paints a material: the brush's colour into its colour texture (when `paint_color`) and its
+/// material channels into its RMH texture (made, with `defaults`, the first time a brush paints
+/// one), each dab the same on both, so a stroke's channels line up texel for texel. The same
+/// calls as StrokePainter; a stroke is one undo record for both textures.
+class MaterialPainter {
+ public:
+  MaterialPainter(MaterialTexture& material, const PaintSurface& surface,
+                  PaintHistory* history = nullptr, MaterialDefaults defaults = {});
+  ~MaterialPainter();
+  MaterialPainter(const MaterialPainter&) = delete;
+  MaterialPainter& operator=(const MaterialPainter&) = delete;
+
+  void begin(const Brush& brush, const PaintCamera* camera = nullptr);
+  bool dab_world(const float p[3]);
+  bool dab_screen(double px, double py);
+  void stroke_world(std::span<const float> xyz);
+  void stroke_screen(std::span<const double> xy);
+  void extend_screen(double px, double py);
+  /// Ends the stroke: the counts of both textures added up (dabs counted once).
+  StrokeStats end();
+  void set_reuse(bool on) { reuse_ = on; }
+
+ private:
+  template <class F>
+  bool each(F&& f);
+  MaterialTexture& m_;
+  const PaintSurface& s_;
+  PaintHistory* history_;
+  MaterialDefaults defaults_;
+  StrokePainter* color_ = nullptr;
+  StrokePainter* rmh_ = nullptr;
   bool reuse_ = true;
 };
 
@@ -120,6 +178,23 @@ bool pick_world(const OctreeTexture& t, const PaintSurface& s, const float p[3],
 /// Eyedropper through a camera pixel (the first surface the ray meets).
 bool pick_screen(const OctreeTexture& t, const PaintSurface& s, const PaintCamera& camera,
                  double px, double py, float rgba[4]);
+
+/// Fill with a whole brush (colour, opacity, blend and material channels; `depth` as above):
+/// into the colour texture when the brush paints colour, into the RMH texture (made with
+/// `defaults` when absent) when it paints a channel. Returns the samples changed.
+size_t fill(MaterialTexture& m, const PaintSurface& s, const Brush& brush, int depth = 0,
+            MaterialDefaults defaults = {});
+
+/// What the eyedropper finds on a material.
+struct MaterialPick {
+  bool found = false;             ///< a painted colour sample was there
+  float rgba[4] = {0, 0, 0, 0};   ///< base colour (the background where none)
+  float channels[3] = {0, 0, 0};  ///< roughness, metallic, height (the defaults where none)
+};
+MaterialPick pick_world(const MaterialTexture& m, const PaintSurface& s, const float p[3],
+                        float max_dist);
+MaterialPick pick_screen(const MaterialTexture& m, const PaintSurface& s, const PaintCamera& camera,
+                         double px, double py);
 
 /// Recomputes every mip average from the leaves (after direct sample edits). O(pool).
 void recompute_averages(OctreeTexture& t);

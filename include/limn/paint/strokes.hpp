@@ -41,6 +41,7 @@ struct PickResult {
   size_t command = 0;  ///< index in the script
   bool found = false;  ///< a painted sample was there
   float rgba[4] = {0, 0, 0, 0};
+  float channels[3] = {0, 0, 0};  ///< roughness, metallic, height there (the defaults where none)
 };
 
 struct ScriptResult {
@@ -49,10 +50,10 @@ struct ScriptResult {
   size_t undos = 0, redos = 0;  ///< undo/redo entries that had something to act on
 };
 
-/// Runs a script on a texture, strokes and fills recorded in `history` (so its undo/redo
-/// entries work, and a caller can undo further). Throws InputError for a screen entry without a
-/// camera.
-ScriptResult run_strokes(OctreeTexture& t, const PaintSurface& s, const StrokeScript& script,
-                         PaintHistory& history);
+/// Runs a script on a material, strokes and fills recorded in `history` (so its undo/redo
+/// entries work, and a caller can undo further); an entry painting a channel makes the RMH
+/// texture with `defaults` when absent. Throws InputError for a screen entry without a camera.
+ScriptResult run_strokes(MaterialTexture& m, const PaintSurface& s, const StrokeScript& script,
+                         PaintHistory& history, MaterialDefaults defaults = {});
 
 }  // namespace limn

@@ -10,6 +10,8 @@
 
 namespace limn {
 
+struct MaterialTexture;
+
 class PaintHistory {
  public:
   /// Keeps at most `max_strokes` undoable strokes and about `max_bytes` of records (the oldest
@@ -27,6 +29,13 @@ class PaintHistory {
   bool undo(OctreeTexture& t);
   /// Redoes the most recently undone stroke; false when there is none.
   bool redo(OctreeTexture& t);
+
+  /// The same for a material: one record per stroke holds the writes to its colour and RMH
+  /// textures. Precondition: an RMH texture a stroke will paint exists before begin().
+  void begin(MaterialTexture& m);
+  size_t end(MaterialTexture& m);
+  bool undo(MaterialTexture& m);
+  bool redo(MaterialTexture& m);
   /// Forgets every record (after the texture was replaced or edited outside the history).
   void clear();
 
@@ -37,8 +46,10 @@ class PaintHistory {
 
  private:
   struct Record {
-    std::vector<OctreeTexture::JournalOp> ops;
+    std::vector<OctreeTexture::JournalOp> ops, rmh_ops;
   };
+  void start(OctreeTexture& t);
+  size_t keep(Record r);
   std::vector<Record> done_, undone_;
   size_t max_strokes_, max_bytes_;
 };

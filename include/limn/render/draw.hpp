@@ -36,6 +36,11 @@ struct DrawOptions {
   /// normal, over the base or depth colour; null: none.
   const GpuOctreeTexture* texture = nullptr;
   bool texture_nearest = false;  ///< nearest texel, not filtered (trilinear + mip by footprint)
+  /// A painted material's RMH texture (limn/paint/material.hpp; null: none): roughness and
+  /// metallic shaded physically (GGX), height as a bump of `height_scale` model units per unit.
+  /// Looked up filtered at each fragment, as the base colour.
+  const GpuOctreeTexture* material = nullptr;
+  float height_scale = 0.0f;
   /// A checker of this many squares per UV unit, tinted by (u, v) so flips and seams show; 0:
   /// off. Meshes with UVs, and patch tables of cages with linear UVs (FVarInterpolation::all);
   /// without UVs the colour stays.

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "limn/paint/texture.hpp"
@@ -48,8 +49,10 @@ class GpuOctreeTexture {
   };
   Lookups lookup(std::span<const float> p, std::span<const float> n, float footprint) const;
 
-  /// Binds the pool and sets the lookup uniforms of `program` (render layer internal).
+  /// Binds the pool and sets the lookup uniforms of `program` (render layer internal): those of
+  /// octree.glsl, or of a copy whose names start with `prefix` and whose pool is at `binding`.
   void bind(unsigned program, int mode) const;
+  void bind(unsigned program, int mode, const std::string& prefix, unsigned binding) const;
 
  private:
   struct Impl;

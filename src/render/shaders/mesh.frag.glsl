@@ -1,4 +1,5 @@
-// mesh.frag: MeshDrawer's fragment shader (after shade.glsl and octree.glsl)
+// mesh.frag: MeshDrawer's fragment shader (after shade.glsl, octree.glsl and, with MATERIAL,
+// material.glsl)
 in vec3 t_pos;
 in vec3 t_nrm;
 in vec3 t_col;
@@ -15,5 +16,9 @@ void main() {
   }
   vec3 base = t_col;
   if (uv_checker > 0.0 && t_uv.z > 0.5) base = uv_checker_color(t_uv.xy, uv_checker);
+#ifdef MATERIAL
+  frag = vec4(shade_material(oct_paint(base, t_pos, t_nrm), t_pos, t_nrm, eye, edge, outline), 1.0);
+#else
   frag = vec4(shade(oct_paint(base, t_pos, t_nrm), t_pos, t_nrm, eye, edge, outline), 1.0);
+#endif
 }

@@ -1,4 +1,5 @@
-// patch.frag: PatchDrawer's fragment shader (after shade.glsl and octree.glsl)
+// patch.frag: PatchDrawer's fragment shader (after shade.glsl, octree.glsl and, with MATERIAL,
+// material.glsl)
 in vec3 t_pos;
 in vec3 t_nrm;
 in vec2 t_uv;
@@ -29,5 +30,9 @@ void main() {
     vec2 d = min(t_uv, 1.0 - t_uv) / max(fwidth(t_uv), vec2(1e-9));
     edge = min(d.x, d.y);
   }
+#ifdef MATERIAL
+  frag = vec4(shade_material(c, t_pos, t_nrm, eye, edge, outline), 1.0);
+#else
   frag = vec4(shade(c, t_pos, t_nrm, eye, edge, outline), 1.0);
+#endif
 }
