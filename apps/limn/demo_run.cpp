@@ -10,6 +10,7 @@
 #include <cmath>
 #include <filesystem>
 #include <memory>
+#include <optional>
 
 #include "gl_commands.hpp"
 #include "limn/atlas/unwrap.hpp"
@@ -185,20 +186,23 @@ Mesh workflow_paint(const std::filesystem::path& dir, std::string& md, nlohmann:
   fmt::print(stderr, "paint: {} triangles ...", dense.face_count());
   std::fflush(stderr);
   const PaintSurface surface(dense);
-  OctreeTexture texture = OctreeTexture::create(surface, pack_rgba8(235, 235, 225, 255));
+  MaterialTexture texture =
+      MaterialTexture::from_color(OctreeTexture::create(surface, pack_rgba8(235, 235, 225, 255)));
   const Box box = bounding_box(dense);
   const float extent = box.diagonal();
-  StrokePainter painter(texture, surface);
+  MaterialPainter painter(texture, surface);
+  // Each stroke carries a material: red metal, matte blue, a raised green ridge, gold.
   struct Stroke {
     float height;  // fraction of the height from the bottom
     bool outer;    // the ring farther from the axis
     float color[4];
-    float radius;  // fraction of the diagonal
+    float radius;                       // fraction of the diagonal
+    float roughness, metallic, relief;  // channels; < 0: not painted
   };
-  const Stroke strokes[] = {{0.99f, true, {0.85f, 0.15f, 0.1f, 1}, 0.035f},
-                            {0.5f, true, {0.1f, 0.35f, 0.85f, 1}, 0.05f},
-                            {0.5f, false, {0.15f, 0.65f, 0.3f, 1}, 0.03f},
-                            {0.2f, true, {0.95f, 0.7f, 0.1f, 1}, 0.03f}};
+  const Stroke strokes[] = {{0.99f, true, {0.85f, 0.15f, 0.1f, 1}, 0.035f, 0.25f, 1.0f, -1},
+                            {0.5f, true, {0.1f, 0.35f, 0.85f, 1}, 0.05f, 0.9f, -1, -1},
+                            {0.5f, false, {0.15f, 0.65f, 0.3f, 1}, 0.03f, -1, -1, 1.0f},
+                            {0.2f, true, {0.95f, 0.7f, 0.1f, 1}, 0.03f, 0.35f, 1.0f, -1}};
   size_t dabs = 0;
   for (const Stroke& s : strokes) {
     Brush b;
@@ -206,6 +210,9 @@ Mesh workflow_paint(const std::filesystem::path& dir, std::string& md, nlohmann:
     b.radius = s.radius * extent;
     b.hardness = 0.6f;
     b.depth = 9;
+    const float values[3] = {s.roughness, s.metallic, s.relief};
+    for (int k = 0; k < kMaterialChannels; ++k)
+      if (values[k] >= 0) b.material[k] = {true, values[k], BlendMode::mix, 0.9f};
     const float z = box.min[2] + s.height * (box.max[2] - box.min[2]);
     const std::vector<float> xyz = ring_stroke(dense, z, 0.02f * extent, s.outer);
     if (xyz.empty()) continue;
@@ -215,26 +222,34 @@ Mesh workflow_paint(const std::filesystem::path& dir, std::string& md, nlohmann:
   }
   save_lot(texture, dir / "torus.lot");
   Mesh painted = dense;
-  painted.colors = bake_vertex_colors(texture, dense);
+  painted.colors = bake_vertex_colors(texture.color, dense);
   write_mesh(painted, dir / "torus-painted.glb");
-  const OctreeTextureStats ts = texture.stats();
+  const OctreeTextureStats ts = texture.color.stats();
+  const size_t rmh_bytes = texture.rmh ? texture.rmh->stats().bytes : 0;
   const double t_paint = sw.lap();
   fmt::print(stderr, " {} dabs, {} texels, {:.1f} bytes per texel ({:.0f} ms)\n", dabs,
              ts.painted_samples, ts.bytes_per_painted_texel, t_paint);
   md += fmt::format(
-      "\nPaint: four scripted strokes ({} dabs) into an adaptive octree texture (no UVs), leaves "
-      "down to level 9 only under the brush: {} painted texels, {} bytes ({:.1f} per painted "
-      "texel), max depth {}; baked to vertex colours ([torus-painted.glb](torus-painted.glb), "
-      "texture [torus.lot](torus.lot)). {:.0f} ms.\n\n",
-      dabs, ts.painted_samples, ts.bytes, ts.bytes_per_painted_texel, ts.max_depth, t_paint);
+      "\nPaint: four scripted strokes ({} dabs), each carrying a material (red metal, matte blue, "
+      "a raised green ridge, gold), into adaptive octree textures (no UVs), leaves down to level "
+      "9 only under the brush: base colour {} painted texels, {} bytes ({:.1f} per painted "
+      "texel), max depth {}; roughness, metallic and height {} bytes; the colour baked to vertex "
+      "colours ([torus-painted.glb](torus-painted.glb), texture [torus.lot](torus.lot)). {:.0f} "
+      "ms.\n\n",
+      dabs, ts.painted_samples, ts.bytes, ts.bytes_per_painted_texel, ts.max_depth, rmh_bytes,
+      t_paint);
   if (gl) {
-    // The limit surface drawn by the tessellation shaders, coloured per fragment by the octree
-    // texture looked up on the GPU (no baking, no UVs).
+    // The limit surface drawn by the tessellation shaders, shaded per fragment by the material
+    // looked up on the GPU (no baking, no UVs).
     const std::vector<float> table_points = table.points(cage.positions);
     PatchDrawer drawer(cage, table, table_points);
-    GpuOctreeTexture gpu_texture(texture);
+    GpuOctreeTexture gpu_texture(texture.color);
+    std::optional<GpuOctreeTexture> gpu_rmh;
+    if (texture.rmh) gpu_rmh.emplace(*texture.rmh);
     DrawOptions o;
     o.texture = &gpu_texture;
+    o.material = gpu_rmh ? &*gpu_rmh : nullptr;
+    o.height_scale = texture.height_scale;
     target->begin(kWhite);
     drawer.draw(overview(cage), o);
     save_image(*target, dir / "painted.png");
@@ -243,6 +258,7 @@ Mesh workflow_paint(const std::filesystem::path& dir, std::string& md, nlohmann:
   j["paint"] = {{"dabs", dabs},
                 {"painted_texels", ts.painted_samples},
                 {"bytes", ts.bytes},
+                {"material_bytes", rmh_bytes},
                 {"max_depth", ts.max_depth},
                 {"ms", t_paint}};
   sw.lap();
@@ -257,15 +273,23 @@ Mesh workflow_paint(const std::filesystem::path& dir, std::string& md, nlohmann:
   UnwrapOptions uo;
   uo.size = 512;
   const UnwrapResult atlas = unwrap_mesh(coarse, uo, "torus");
-  const Image baked = bake_uv_texture(texture, atlas.mesh, uo.size, uo.size, 8);
+  const MaterialImages baked = bake_material(texture, atlas.mesh, uo.size, uo.size, 8, {}, true);
   GlbTextures material;
-  material.base_color_png = encode_png(baked);
+  material.base_color_png = encode_png(baked.base_color);
+  material.metallic_roughness_png = encode_png(baked.metallic_roughness);
+  material.normal_png = encode_png(baked.normal);
+  material.metallic = material.roughness = 1;  // the texture's values as they are
   std::string glb;
   write_glb(atlas.mesh, material, glb);
   const std::vector<uint8_t> layout = uv_layout_image(atlas.mesh, atlas.face_chart, uo.size);
   write_png(dir / "torus-atlas.png", uo.size, uo.size, layout);
-  write_file_atomic(dir / "torus-basecolor.png", material.base_color_png);
-  write_file_atomic(dir / "torus-textured.glb", glb);
+  const std::vector<std::pair<std::filesystem::path, std::string>> files = {
+      {dir / "torus-basecolor.png", material.base_color_png},
+      {dir / "torus-metallic-roughness.png", material.metallic_roughness_png},
+      {dir / "torus-normal.png", material.normal_png},
+      {dir / "torus-height.png", encode_png16(baked.height)},
+      {dir / "torus-textured.glb", glb}};
+  write_files_atomic(files);
   write_mesh(atlas.mesh, dir / "torus-atlas.obj");
   const UnwrapStats& us = atlas.stats;
   const double t_atlas = sw.lap();
@@ -274,11 +298,15 @@ Mesh workflow_paint(const std::filesystem::path& dir, std::string& md, nlohmann:
   md += fmt::format(
       "Atlas and bake: the surface tessellated more lightly ({} triangles) and unwrapped into {} "
       "charts on a {}x{} atlas ({:.1f}% of it used with {}-texel gutters, Sander stretch L2 "
-      "{:.4f}); the octree texture baked into it ([torus-basecolor.png](torus-basecolor.png)) and "
-      "carried by the material of [torus-textured.glb](torus-textured.glb) (mesh with its UVs: "
+      "{:.4f}); the material baked into it: base colour, roughness (green) and metalness (blue) "
+      "packed as glTF wants them, a normal map of the height (and the height itself, 16-bit: "
+      "[torus-height.png](torus-height.png)), all carried by the material of "
+      "[torus-textured.glb](torus-textured.glb) (mesh with its UVs: "
       "[torus-atlas.obj](torus-atlas.obj)). {:.0f} ms.\n\n"
-      "| atlas (a colour per chart) | baked texture |\n|---|---|\n"
-      "| ![atlas](torus-atlas.png) | ![baked](torus-basecolor.png) |\n\n",
+      "| atlas (a colour per chart) | base colour | metallic-roughness | normal map |\n"
+      "|---|---|---|---|\n"
+      "| ![atlas](torus-atlas.png) | ![baked](torus-basecolor.png) | "
+      "![metallic-roughness](torus-metallic-roughness.png) | ![normal](torus-normal.png) |\n\n",
       coarse.face_count(), us.charts, uo.size, uo.size, 100 * us.utilization, uo.padding,
       us.stretch_l2, t_atlas);
   j["atlas"] = {
