@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Every kind of GLB limn writes, checked by the Khronos glTF validator: shapes, a converted cage
 # with UV seams, an unwrapped atlas, bakes into a material (base colour; and with roughness,
-# metalness and a normal map), uniform and adaptive subdivision,
-# simplification with UVs, the demo's painted bake. Zero errors allowed (warnings are printed).
+# metalness and a normal map), uniform and adaptive subdivision, simplification with UVs, a
+# painted scan's material, the demo's painted bake. Zero errors allowed (warnings are printed).
 # Usage: validate.sh LIMN_CLI NODE_MODULES_DIR SHARED_MODELS_DIR
 set -euo pipefail
 limn=$1 modules=$2 models=$3
@@ -38,6 +38,16 @@ if [[ -d "$models/osd" ]]; then
   "$limn" subdivide "$bigguy" -o "$work/bigguy-adaptive.glb" --adaptive --depth 2 >/dev/null 2>&1
   "$limn" simplify "$bigguy" -o "$work/bigguy-simplified.glb" --proxies 60 >/dev/null 2>&1
   "$limn" convert "$models/tri/spot.obj" "$work/spot.glb" >/dev/null 2>&1
+  # A painted scan out to a material GLB: a stroke of red metal along the bunny's flank.
+  cat >"$work/bunny.json" <<'JSON'
+{"strokes": [{"points": [[-0.0665, 0.101466, 0.041219], [-0.039509, 0.098682, 0.041774],
+  [-0.015394, 0.099814, 0.044364], [0.020477, 0.098952, 0.046347]], "radius": 0.006,
+  "color": [1, 0, 0, 1], "metallic": 1, "roughness": 0.3, "height": 0.8}]}
+JSON
+  "$limn" paint "$models/tri/stanford-bunny.obj" --strokes "$work/bunny.json" \
+    -o "$work/bunny.lot" >/dev/null 2>&1
+  "$limn" bake "$work/bunny.lot" "$models/tri/stanford-bunny.obj" --atlas --size 512 \
+    --normal-map -o "$work/bunny-material.glb" >/dev/null 2>&1
 fi
 mapfile -t files < <(find "$work" -name '*.glb' | sort)
 node "$here/validate.cjs" "$modules" "${files[@]}"
