@@ -1,9 +1,9 @@
 // limn unwrap beside xatlas on the shared tri/ meshes: charts, utilisation at a 1024 x 1024 atlas
 // with 2 texels of padding, Sander's L2 / Linf stretch, and time; then the time to bake a painted
 // octree texture into that atlas (1024^2, gutter 8), which xatlas does not do: its base colour
-// alone ("bake s"), and every material channel with a normal map of the height ("mat s"). Utilisation is
-// xatlas's measure (texels of the padded charts over the atlas); cover is the texels the triangles
-// touch alone.
+// alone ("bake s"), and every material channel with a normal map of the height ("mat s").
+// Utilisation is xatlas's measure (texels of the padded charts over the atlas); cover is the texels
+// the triangles touch alone.
 //
 // xatlas is not packaged for Debian, so its columns are the figures measured on this machine
 // model for ../shared/design/pipeline.md ("Numbers to beat": xatlas defaults, padding 2,
@@ -100,8 +100,8 @@ int main(int argc, char** argv) {
     };
     const double bake =
         best_of([&] { limn::bake_uv_texture(texture.color, atlas.mesh, o.size, o.size, 8); });
-    const double bake_material = best_of(
-        [&] { limn::bake_material(texture, atlas.mesh, o.size, o.size, 8, {}, true); });
+    const double bake_material =
+        best_of([&] { limn::bake_material(texture, atlas.mesh, o.size, o.size, 8, {}, true); });
     fmt::print(
         "{:<15} {:>6} {:>7.1f} {:>7.1f} {:>8.4f} {:>8.3f} {:>8.2f} {:>7.2f} {:>6.2f} | {:>6} "
         "{:>6.1f}/{:<6.1f} "

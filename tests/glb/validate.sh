@@ -20,13 +20,7 @@ trap 'rm -rf "$work"' EXIT
 echo '{"strokes": [{"type": "fill", "color": [0.2, 0.6, 0.3, 1]}]}' >"$work/fill.json"
 "$limn" paint "$work/torus.obj" --strokes "$work/fill.json" -o "$work/torus.lot" >/dev/null
 "$limn" bake "$work/torus.lot" "$work/torus.obj" --atlas --size 256 -o "$work/torus-baked.glb" >/dev/null
-cat >"$work/material.json" <<'JSON'
-{"strokes": [{"type": "fill", "color": [0.7, 0.5, 0.3, 1]},
- {"points": [[1.4, 0, 0], [0, 1.4, 0]], "radius": 0.3, "color": [0.9, 0.1, 0.1], "metallic": 1,
-  "roughness": 0.2, "depth": 7},
- {"points": [[0, -1.4, 0.3], [1.0, -1.0, 0.3]], "radius": 0.25, "height": 1, "depth": 7}]}
-JSON
-"$limn" paint "$work/torus.obj" --strokes "$work/material.json" -o "$work/material.lot" >/dev/null
+"$limn" paint "$work/torus.obj" --strokes "$here/material.json" -o "$work/material.lot" >/dev/null
 "$limn" bake "$work/material.lot" "$work/torus.obj" --atlas --size 256 --normal-map \
   -o "$work/torus-material.glb" >/dev/null
 "$limn" demo --quick -o "$work/demo" >/dev/null 2>&1

@@ -7,7 +7,10 @@
 #include <cmath>
 #include <cstdint>
 #include <random>
+#include <string>
 #include <vector>
+
+#include <gtest/gtest.h>
 
 #include "limn/mesh/mesh.hpp"
 
@@ -91,6 +94,19 @@ void sample_bilinear(const T* data, int channels, int width, int height, int til
 inline double quantile(std::vector<double>& v, double q) {
   std::sort(v.begin(), v.end());
   return v[size_t(q * double(v.size() - 1))];
+}
+
+/// Records the median, 99th percentile and largest of per-sample errors (8-bit steps) as the
+/// test's properties and checks each against its bound.
+inline void expect_steps_within(std::vector<double>& steps, double median, double q99,
+                                double worst) {
+  const double m = quantile(steps, 0.5), q = quantile(steps, 0.99), w = quantile(steps, 1.0);
+  ::testing::Test::RecordProperty("median_steps", std::to_string(m));
+  ::testing::Test::RecordProperty("q99_steps", std::to_string(q));
+  ::testing::Test::RecordProperty("max_steps", std::to_string(w));
+  EXPECT_LE(m, median);
+  EXPECT_LE(q, q99);
+  EXPECT_LE(w, worst);
 }
 
 }  // namespace limn::test

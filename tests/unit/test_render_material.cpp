@@ -11,8 +11,7 @@
 #include "limn/render/draw.hpp"
 #include "limn/render/gl_context.hpp"
 #include "limn/render/image.hpp"
-#include "paint/octree_blocks.hpp"
-#include "paint_oracle.hpp"
+#include "material_oracle.hpp"
 
 namespace limn {
 namespace {
@@ -73,6 +72,21 @@ Camera looking_down_z(double distance, double fovy) {
   return cam;
 }
 
+// The material drawn by MeshDrawer over black, as the viewer and limn render draw it.
+std::vector<uint8_t> draw_material(const Mesh& m, const MaterialTexture& mat, const Camera& cam) {
+  GpuOctreeTexture color(mat.color), rmh(*mat.rmh);
+  MeshDrawer drawer(m);
+  RenderTarget target(cam.width, cam.height, 1);
+  const float black[4] = {0, 0, 0, 1};
+  target.begin(black);
+  DrawOptions o;
+  o.texture = &color;
+  o.material = &rmh;
+  o.height_scale = mat.height_scale;
+  drawer.draw(cam, o);
+  return target.read_rgba();
+}
+
 const uint8_t* pixel(const std::vector<uint8_t>& px, const Camera& cam, const float p[3]) {
   double x, y;
   EXPECT_TRUE(cam.project(p, x, y));
@@ -98,17 +112,7 @@ TEST(RenderMaterial, AGlossyMetalDabShadesAsTheModelSays) {
   const MaterialDefaults d = mat.defaults();
 
   const Camera cam = looking_down_z(4, 40);
-  GpuOctreeTexture color(mat.color), rmh(*mat.rmh);
-  MeshDrawer drawer(sphere);
-  RenderTarget target(200, 200, 1);
-  const float black[4] = {0, 0, 0, 1};
-  target.begin(black);
-  DrawOptions o;
-  o.texture = &color;
-  o.material = &rmh;
-  o.height_scale = mat.height_scale;
-  drawer.draw(cam, o);
-  const std::vector<uint8_t> px = target.read_rgba();
+  const std::vector<uint8_t> px = draw_material(sphere, mat, cam);
   const D3 base = {230 / 255.0, 180 / 255.0, 120 / 255.0};
   // Points on the sphere: the normal is the point; the eye is at (0, 0, 4).
   struct Probe {
@@ -138,45 +142,15 @@ TEST(RenderMaterial, AGlossyMetalDabShadesAsTheModelSays) {
 
 TEST(RenderMaterial, AHeightRampTiltsTheShadingNormal) {
   context();
-  // A sheet facing +z, lifted off the cube's middle plane by a tiny triangle below it (so the
-  // sheet runs through a layer of cells, not along a face between two).
-  Mesh m = test::sheet(-1, 1, -1, 1, 0, 32, true);
-  const uint32_t v0 = uint32_t(m.vertex_count());
-  m.add_vertex(0, 0, -0.7f), m.add_vertex(0.01f, 0, -0.7f), m.add_vertex(0, 0.01f, -0.7f);
-  m.add_face({v0, v0 + 1, v0 + 2});
+  Mesh m = test::lifted_sheet(-1, 1, 32, -0.7f);
   m.uvs.clear(), m.uv_indices.clear();
   const PaintSurface s(m);
   MaterialTexture mat =
       MaterialTexture::from_color(OctreeTexture::create(s, pack_rgba8(200, 200, 200, 255)));
   mat.height_scale = 2.0f;
-  OctreeTexture& t = mat.ensure_rmh(s, {});
-  const int depth = 6;
-  refine_surface(t, s, depth);
-  {
-    // Height byte 64 + 2 i in column i: a ramp along x.
-    detail::OctreeEditor ed(t);
-    std::vector<std::pair<size_t, Rgba8>> writes;
-    t.for_each_sample([&](const OctreeSample& x) {
-      writes.push_back({x.word, pack_rgba8(128, 0, 64 + 2 * x.x, 255)});
-    });
-    for (auto [w, c] : writes) ed.set(uint32_t(w), c);
-  }
-  recompute_averages(t);
-  const double cell = double(t.size()) / 64;
-  const double slope = (2.0 / 255) / cell * mat.height_scale;  // model units per model unit
-
+  const double slope = test::paint_height_ramp(mat, s) * mat.height_scale;  // model units
   const Camera cam = looking_down_z(3, 30);
-  GpuOctreeTexture color(mat.color), rmh(t);
-  MeshDrawer drawer(m);
-  RenderTarget target(200, 200, 1);
-  const float black[4] = {0, 0, 0, 1};
-  target.begin(black);
-  DrawOptions o;
-  o.texture = &color;
-  o.material = &rmh;
-  o.height_scale = mat.height_scale;
-  drawer.draw(cam, o);
-  const std::vector<uint8_t> px = target.read_rgba();
+  const std::vector<uint8_t> px = draw_material(m, mat, cam);
   const D3 base = {200 / 255.0, 200 / 255.0, 200 / 255.0};
   const MaterialDefaults d = mat.defaults();
   const D3 bumped = normalized({-slope, 0, 1});
