@@ -1,6 +1,6 @@
-// limn bake: an octree texture into per-vertex colours (PLY, OBJ, OFF, or GLB without UVs), or
-// into a UV layout (the mesh's own, or a new atlas with --atlas): PNG images (one per UDIM tile)
-// with a dilated gutter, or a GLB whose material carries the baked texture.
+// limn bake: a painted material into per-vertex colours (PLY, OBJ, OFF, or GLB without UVs), or
+// into a UV layout (the mesh's own, or a new atlas with --atlas): PNG images (one per UDIM tile
+// and channel) with a dilated gutter, or a GLB whose PBR material carries the baked textures.
 #include <fmt/format.h>
 
 #include <cctype>
@@ -290,8 +290,9 @@ void run(const BakeOpts& o, CLI::App* cmd) {
 void add_bake(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "bake",
-      "Bake an octree texture into per-vertex colours, or into UV textures: PNG (UDIM tiles "
-      "name.1001.png, ...) or a GLB with the texture in its material; --atlas makes the UVs");
+      "Bake an octree texture into per-vertex colours, or into UV textures: PNGs (UDIM tiles "
+      "name.1001.png, ...; the material channels with --metallic-roughness, --height, --normal) "
+      "or a GLB whose PBR material carries them; --atlas makes the UVs");
   auto o = std::make_shared<BakeOpts>();
   cmd->add_option("TEXTURE", o->texture, "Octree texture (.lot)")->required();
   cmd->add_option("MESH", o->mesh, "Mesh to bake onto (OBJ, PLY, OFF, STL, glTF/GLB)")->required();

@@ -27,7 +27,8 @@ void add_render(CLI::App& app) {
   add_adaptive_options(*cmd, o->a, true);
   cmd->add_flag("--wireframe", o->wireframe, "Outline the patches (or the mesh's polygons)");
   cmd->add_option("--texture", o->texture,
-                  "Colour from an octree texture (.lot, limn paint) painted on this surface");
+                  "Colour from an octree texture (.lot, limn paint) painted on this surface, and "
+                  "its material channels shaded (GGX roughness and metalness, height as bump)");
   cmd->add_flag("--nearest", o->nearest, "--texture: nearest texel, not filtered");
   cmd->add_flag("--flat", o->flat, "Mesh: one normal per polygon (faceted), not per vertex");
   cmd->add_option("--uv-checker", o->uv_checker,
