@@ -80,12 +80,12 @@ MaterialPainter::MaterialPainter(MaterialTexture& material, const PaintSurface& 
     : m_(material), s_(surface), history_(history), defaults_(defaults) {}
 
 MaterialPainter::~MaterialPainter() {
-  if (color_ || rmh_) end();
+  if (stroking_) end();
 }
 
 void MaterialPainter::begin(const Brush& brush, const PaintCamera* camera) {
   check_brush(brush, "brush");
-  if (color_ || rmh_) end();
+  if (stroking_) end();
   // Made before the history starts: the record then holds the stroke's writes to it, and an
   // undo leaves an unpainted RMH texture.
   if (brush.paints_material()) m_.ensure_rmh(s_, defaults_);
@@ -97,11 +97,13 @@ void MaterialPainter::begin(const Brush& brush, const PaintCamera* camera) {
     if (p) p->set_reuse(reuse_), p->begin(brush, camera);
   if (history_) history_->begin(m_);
   color_ = c.release(), rmh_ = r.release();
+  // A brush with neither colour nor a channel on makes a stroke that paints nothing.
+  stroking_ = true;
 }
 
 template <class F>
 bool MaterialPainter::each(F&& f) {
-  if (!color_ && !rmh_) throw std::logic_error("MaterialPainter: outside a stroke");
+  if (!stroking_) throw std::logic_error("MaterialPainter: outside a stroke");
   bool any = false;
   for (StrokePainter* p : {color_, rmh_})
     if (p) any = f(*p) || any;
@@ -145,11 +147,11 @@ StrokeStats MaterialPainter::end() {
     }
     first = false;
   }
-  const bool was = color_ || rmh_;
   delete color_;
   delete rmh_;
   color_ = rmh_ = nullptr;
-  if (was && history_) history_->end(m_);
+  if (stroking_ && history_) history_->end(m_);
+  stroking_ = false;
   return total;
 }
 

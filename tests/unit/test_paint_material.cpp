@@ -183,6 +183,15 @@ TEST(MaterialPaint, UndoAndRedoCoverBothTextures) {
   }
   // A record with RMH writes does not undo onto a colour texture alone.
   EXPECT_THROW(h.undo(mat.color), std::logic_error);
+  // A brush that paints neither colour nor a channel paints nothing and records nothing.
+  Brush none = base_brush();
+  none.paint_color = false;
+  MaterialPainter idle(mat, s, &h);
+  idle.begin(none);
+  EXPECT_FALSE(idle.dab_world(kLine.data()));
+  idle.end();
+  EXPECT_EQ(serialize_lot(mat), states[3]);
+  EXPECT_EQ(h.undo_count(), 3u);
 }
 
 // Writes a version-1 file of a colour texture from the version-2 bytes, by the layout in

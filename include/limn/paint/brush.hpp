@@ -80,7 +80,8 @@ void check_brush(const Brush& b, const char* what);
 /// the same bit for bit on any number of them); one painter is not to be called from two threads.
 class StrokePainter {
  public:
-  /// `history` (may be null) records each stroke for undo.
+  /// `history` (may be null) records each stroke for undo. `target`: what the brush paints into
+  /// `texture` (its colour, whatever `paint_color` says, or its material channels).
   StrokePainter(OctreeTexture& texture, const PaintSurface& surface,
                 PaintHistory* history = nullptr, PaintTarget target = PaintTarget::color);
   ~StrokePainter();
@@ -128,7 +129,8 @@ class StrokePainter {
 /// Paints a material: the brush's colour into its colour texture (when `paint_color`) and its
 /// material channels into its RMH texture (made, with `defaults`, the first time a brush paints
 /// one), each dab the same on both, so a stroke's channels line up texel for texel. The same
-/// calls as StrokePainter; a stroke is one undo record for both textures.
+/// calls as StrokePainter; a stroke is one undo record for both textures. A brush with neither
+/// colour nor a channel on paints nothing (its dabs return false).
 class MaterialPainter {
  public:
   MaterialPainter(MaterialTexture& material, const PaintSurface& surface,
@@ -156,6 +158,7 @@ class MaterialPainter {
   MaterialDefaults defaults_;
   StrokePainter* color_ = nullptr;
   StrokePainter* rmh_ = nullptr;
+  bool stroking_ = false;
   bool reuse_ = true;
 };
 
