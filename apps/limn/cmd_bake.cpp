@@ -245,17 +245,16 @@ void run(const BakeOpts& o, CLI::App* cmd) {
       files.emplace_back(out, std::string());
       write_glb(mesh, glb_material, files.back().second);
     }
+    std::vector<std::string> mesh_dropped;
     if (!o.mesh_out.empty()) {
-      for (const std::string& name : dropped_attributes(mesh, mesh_out_format))
-        dropped.push_back(name);
+      mesh_dropped = dropped_attributes(mesh, mesh_out_format);
       files.emplace_back(o.mesh_out, write_mesh_memory(mesh, mesh_out_format));
     }
     write_files_atomic(files);
-    const auto names = dropped.get<std::vector<std::string>>();
-    if (names.size() > dropped_channels.size())
-      fmt::print(
-          stderr, "limn: warning: {}: dropped {}\n", o.mesh_out,
-          fmt::join(names.begin() + std::ptrdiff_t(dropped_channels.size()), names.end(), ", "));
+    if (!mesh_dropped.empty())
+      fmt::print(stderr, "limn: warning: {}: dropped {}\n", o.mesh_out,
+                 fmt::join(mesh_dropped, ", "));
+    for (const std::string& name : mesh_dropped) dropped.push_back(name);
     j["mode"] = glb ? "glb" : "uv";
     size_t opaque = 0;
     for (const auto& t : images) opaque += t["opaque_texels"].get<size_t>();

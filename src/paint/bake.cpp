@@ -197,8 +197,9 @@ std::vector<float> sample_texels(const OctreeTexture& t, const Mesh& mesh, const
 }
 
 // Gutter: `gutter` rings of texels around the covered ones, each the mean of its filled
-// 8-neighbours, over `channels` floats per texel.
-void dilate(std::vector<float>& img, int channels, const UvRaster& r, int gutter) {
+// 8-neighbours, over `channels` floats per texel. Returns which texels hold a value (covered or
+// filled).
+std::vector<uint8_t> dilate(std::vector<float>& img, int channels, const UvRaster& r, int gutter) {
   const size_t W = r.W, H = r.H, C = size_t(channels);
   std::vector<uint8_t> filled(W * H);
   for (size_t i = 0; i < W * H; ++i) filled[i] = r.covered(i);
@@ -227,6 +228,7 @@ void dilate(std::vector<float>& img, int channels, const UvRaster& r, int gutter
     if (ring.empty()) break;
     for (size_t i : ring) filled[i] = 1;
   }
+  return filled;
 }
 
 uint8_t to_byte(float v) {
@@ -242,19 +244,12 @@ Image rgba8_image(const std::vector<float>& rgba, const UvRaster& r) {
 }
 
 // Tangent-space normals (OpenGL convention: x along +u, y along +v) of the height field
-// h * scale over the texels: the slope along each texel axis from its covered or dilated
-// neighbours (central where both are, one-sided where one is), over the model units a texel
-// step covers on the texel's triangle. RGBA8, n * 0.5 + 0.5, alpha 255.
-Image normals_from_height(const std::vector<float>& h, const UvRaster& r, int gutter, float scale) {
+// h * scale over the texels: the slope along each texel axis from its neighbours that hold a
+// height (`known`: covered or dilated; central where both are, one-sided where one is), over the
+// model units a texel step covers on the texel's triangle. RGBA8, n * 0.5 + 0.5, alpha 255.
+Image normals_from_height(const std::vector<float>& h, const std::vector<uint8_t>& known,
+                          const UvRaster& r, int gutter, float scale) {
   const size_t W = r.W, H = r.H;
-  std::vector<uint8_t> known(W * H);
-  {
-    // Texels the dilation reached, as dilate() fills them.
-    std::vector<float> mark(W * H);
-    for (size_t i = 0; i < W * H; ++i) mark[i] = r.covered(i) ? 1.0f : 0.0f;
-    dilate(mark, 1, r, gutter);
-    for (size_t i = 0; i < W * H; ++i) known[i] = r.covered(i) || mark[i] > 0;
-  }
   std::vector<float> n(4 * W * H, 0.0f);
   auto slope = [&](size_t i, int64_t x, int64_t y, int64_t dx, int64_t dy) {
     auto at = [&](int64_t a, int64_t b) -> int64_t {
@@ -321,7 +316,7 @@ MaterialImages bake_material(const MaterialTexture& m, const Mesh& mesh, int wid
       for (int k = 0; k < 3; ++k) ch[3 * i + size_t(k)] = v[size_t(k)];
     }
   }
-  dilate(ch, 3, r, gutter);
+  const std::vector<uint8_t> known = dilate(ch, 3, r, gutter);
   if (m.rmh) {
     out.metallic_roughness.width = out.height.width = width;
     out.metallic_roughness.height = out.height.height = height;
@@ -338,7 +333,7 @@ MaterialImages bake_material(const MaterialTexture& m, const Mesh& mesh, int wid
   if (normal_map) {
     std::vector<float> h(n);
     for (size_t i = 0; i < n; ++i) h[i] = ch[3 * i + 2];
-    out.normal = normals_from_height(h, r, gutter, m.height_scale);
+    out.normal = normals_from_height(h, known, r, gutter, m.height_scale);
   }
   return out;
 }
